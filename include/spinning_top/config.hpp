@@ -1,0 +1,36 @@
+// The configuration keys shared by the batch simulator's YAML files and the node's private
+// parameters (~key), with their units and defaults, and their parsing into a SceneConfig.
+#pragma once
+
+#include <map>
+#include <string>
+#include <vector>
+
+#include "spinning_top/simulator.hpp"
+
+namespace spinning_top {
+
+struct ParameterSpec {
+  const char* key;            ///< e.g. "initial/tilt" (YAML: initial: {tilt: ...})
+  const char* unit;           ///< SI unit, "" for text
+  const char* default_value;  ///< used when the key is absent
+  bool required_in_file;      ///< a scene file (batch simulator) must give it
+  const char* description;
+};
+
+/// Every key, in documentation order.
+const std::vector<ParameterSpec>& parameter_specs();
+
+/// key -> value as text (a YAML scalar, a --set value, a ROS parameter).
+using ParameterMap = std::map<std::string, std::string>;
+
+/// Builds and validates a configuration. Unknown keys, values that are not numbers where a
+/// number is expected and invalid values throw InvalidParameter naming the key. With
+/// require_all, keys marked required_in_file must be present; otherwise their documented
+/// defaults apply (the node's behaviour).
+SceneConfig parse_scene_config(const ParameterMap& values, bool require_all);
+
+/// Parses a whole decimal number in text (no trailing characters); throws InvalidParameter.
+double parse_number(const std::string& key, const std::string& text);
+
+}  // namespace spinning_top

@@ -1,0 +1,247 @@
+// Drivers step a scene model to a requested time with an integrator, keep the attitude on
+// the unit sphere, and stop at the first validity event, located within the step.
+//   FixedStepDriver: any one-step method at a fixed maximal step, equal substeps per request.
+//   AdaptiveDriver: an embedded pair with error control; requests are answered by dense
+//   output, so the output rate never forces the step size.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include "spinning_top/events.hpp"
+#include "spinning_top/kinematics.hpp"
+
+namespace spinning_top {
+
+template <class State>
+bool all_finite(const State& y) {
+  return y.array().isFinite().all();
+}
+
+/// Common state of a driver: the reported time and state, and the event that ended the run.
+template <class Model>
+class DriverBase {
+ public:
+  using State = typename Model::State;
+  double time() const { return t_out_; }
+  const State& state() const { return y_out_; }
+  Event event() const { return event_; }
+  long steps() const { return steps_; }                ///< accepted steps since reset
+  long rejected_steps() const { return rejected_; }    ///< rejected attempts since reset
+  /// Ends the run with the given event (kept until the next reset).
+  void stop(Event event) { event_ = event; }
+
+ protected:
+  /// Starts a run at (t, y); an initial state that already violates the model is an event at t.
+  void start(const Model& model, double t, const State& y) {
+    t_out_ = t;
+    y_out_ = y;
+    normalize_attitude(y_out_);
+    steps_ = rejected_ = 0;
+    event_ = all_finite(y_out_) ? triggered_event(event_functions(model, y_out_)) : Event::kNonFinite;
+  }
+
+  double t_out_ = 0.0;
+  State y_out_ = State::Zero();
+  Event event_ = Event::kNone;
+  long steps_ = 0, rejected_ = 0;
+};
+
+template <class Model, class Method>
+class FixedStepDriver : public DriverBase<Model> {
+ public:
+  using State = typename Model::State;
+  static constexpr bool kAdaptive = false;
+
+  explicit FixedStepDriver(double max_step) : max_step_(max_step) {
+    if (!(max_step > 0.0) || !std::isfinite(max_step)) throw std::invalid_argument("step must be positive and finite");
+  }
+
+  void reset(const Model& model, double t, const State& y) { this->start(model, t, y); }
+
+  double max_step() const { return max_step_; }
+  std::string description() const { return std::string(Method::kName) + ", step " + format_step(max_step_); }
+
+  /// Advances to t_target in n equal substeps of at most max_step. Returns the event that
+  /// stopped the run (then time() < t_target is the event time), or kNone.
+  Event advance_to(const Model& model, double t_target) {
+    if (this->event_ != Event::kNone || t_target <= this->t_out_) return this->event_;
+    const double t_start = this->t_out_;
+    const double span = t_target - t_start;
+    const long n = std::max(1L, static_cast<long>(std::ceil(span / max_step_ * (1.0 - 1e-12))));
+    const double dt = span / static_cast<double>(n);
+    Eigen::Vector2d g_old = event_functions(model, this->y_out_);
+    for (long i = 1; i <= n; ++i) {
+      const double t_new = (i == n) ? t_target : t_start + static_cast<double>(i) * dt;
+      const double h = t_new - this->t_out_;
+      State y_new = this->y_out_;
+      method_.step(model, y_new, h);
+      normalize_attitude(y_new);
+      ++this->steps_;
+      if (!all_finite(y_new)) return this->event_ = Event::kNonFinite;
+      const Eigen::Vector2d g_new = event_functions(model, y_new);
+      const Event fired = triggered_event(g_new);
+      if (fired == Event::kNonFinite) return this->event_ = fired;
+      if (fired != Event::kNone) {
+        // Re-take the step from its start with a shorter size: the state at t_lo + tau has
+        // the method's own accuracy, so the event time does too.
+        const State y0 = this->y_out_;
+        const double t0 = this->t_out_;
+        auto state_at = [&](double t) {
+          State y = y0;
+          method_.step(model, y, t - t0);
+          normalize_attitude(y);
+          return y;
+        };
+        Event which;
+        const double t_event = locate_event(model, t0, g_old, t_new, g_new, state_at, which);
+        this->y_out_ = (t_event > t0) ? state_at(t_event) : y0;
+        this->t_out_ = t_event;
+        return this->event_ = which;
+      }
+      this->y_out_ = y_new;
+      this->t_out_ = t_new;
+      g_old = g_new;
+    }
+    return Event::kNone;
+  }
+
+ private:
+  static std::string format_step(double s) {
+    char buffer[32];
+    std::snprintf(buffer, sizeof buffer, "%g s", s);
+    return buffer;
+  }
+  double max_step_;
+  Method method_;
+};
+
+template <class Model, class Method>
+class AdaptiveDriver : public DriverBase<Model> {
+ public:
+  using State = typename Model::State;
+  static constexpr bool kAdaptive = true;
+
+  explicit AdaptiveDriver(double tolerance) : tolerance_(tolerance) {
+    if (!(tolerance > 0.0) || !std::isfinite(tolerance)) throw std::invalid_argument("tolerance must be positive and finite");
+  }
+
+  /// (Re)starts the integration at (t, y); the step size is chosen afresh.
+  void reset(const Model& model, double t, const State& y) {
+    this->start(model, t, y);
+    t_ = t;
+    y_ = this->y_out_;
+    model.derivative(y_, f_);
+    dt_ = initial_step(model);
+    has_dense_ = false;
+    pending_ = Event::kNone;
+    previous_error_ = 1e-4;
+  }
+
+  double tolerance() const { return tolerance_; }
+  /// The size of the last accepted step [s] (0 before the first).
+  double last_step() const { return has_dense_ ? dense_.dt : 0.0; }
+  std::string description() const {
+    char buffer[64];
+    std::snprintf(buffer, sizeof buffer, "%s, tolerance %g", Method::kName, tolerance_);
+    return buffer;
+  }
+
+  Event advance_to(const Model& model, double t_target) {
+    if (this->event_ != Event::kNone || t_target <= this->t_out_) return this->event_;
+    while (t_ < t_target && pending_ == Event::kNone) {
+      if (!take_step(model)) return this->event_ = Event::kNonFinite;
+    }
+    if (pending_ != Event::kNone && t_target >= t_) {
+      this->t_out_ = t_;
+      this->y_out_ = y_;
+      return this->event_ = pending_;
+    }
+    this->t_out_ = t_target;
+    this->y_out_ = Method::dense(dense_, t_target);
+    normalize_attitude(this->y_out_);
+    return Event::kNone;
+  }
+
+ private:
+  // Hairer's step-size control with a PI stabilisation (Solving ODEs I, sec. II.4 and IV.2).
+  static constexpr double kSafety = 0.9, kMaxGrowth = 10.0, kMaxShrink = 0.2, kBeta = 0.04;
+
+  double error_norm(const State& error, const State& y0, const State& y1) const {
+    const State scale = tolerance_ * (1.0 + y0.cwiseAbs().cwiseMax(y1.cwiseAbs()).array()).matrix();
+    return std::sqrt((error.cwiseQuotient(scale)).squaredNorm() / static_cast<double>(error.size()));
+  }
+
+  /// Hairer's starting step heuristic (Solving ODEs I, sec. II.4, "Starting step size").
+  double initial_step(const Model& model) const {
+    const State scale = tolerance_ * (1.0 + y_.cwiseAbs().array()).matrix();
+    const double d0 = y_.cwiseQuotient(scale).norm(), d1 = f_.cwiseQuotient(scale).norm();
+    const double h0 = (d0 < 1e-5 || d1 < 1e-5) ? 1e-6 : 0.01 * d0 / d1;
+    State f1;
+    model.derivative(y_ + h0 * f_, f1);
+    const double d2 = (f1 - f_).cwiseQuotient(scale).norm() / h0;
+    const double dmax = std::max(d1, d2);
+    const double h1 = (dmax <= 1e-15) ? std::max(1e-6, h0 * 1e-3)
+                                      : std::pow(0.01 / dmax, 1.0 / (Method::kEmbeddedOrder + 1));
+    const double h = std::min(100.0 * h0, h1);
+    return std::isfinite(h) && h > 0.0 ? h : 1e-6;
+  }
+
+  /// One accepted step (with as many rejected attempts as needed). False if the step size
+  /// underflows: the solution cannot be continued with finite values.
+  bool take_step(const Model& model) {
+    typename Method::Attempt attempt;
+    for (;;) {
+      if (!(dt_ > 1e-14 * std::max(1.0, std::abs(t_)))) return false;
+      method_.attempt(model, y_, f_, dt_, attempt);
+      const double err = error_norm(attempt.error, y_, attempt.y1);
+      const double exponent = 1.0 / (Method::kEmbeddedOrder + 1);
+      if (std::isfinite(err) && err <= 1.0 && all_finite(attempt.f1)) {
+        const double factor = std::pow(err, exponent - 0.75 * kBeta) / std::pow(previous_error_, kBeta);
+        method_.prepare_dense(y_, f_, attempt, t_, dt_, dense_);
+        has_dense_ = true;
+        const double t_new = t_ + dt_;
+        State y_new = attempt.y1;
+        normalize_attitude(y_new);
+        const Eigen::Vector2d g_old = event_functions(model, y_), g_new = event_functions(model, y_new);
+        ++this->steps_;
+        const Event fired = triggered_event(g_new);
+        if (fired == Event::kNonFinite) return false;
+        if (fired != Event::kNone) {
+          auto state_at = [&](double t) {
+            State y = Method::dense(dense_, t);
+            normalize_attitude(y);
+            return y;
+          };
+          const double t_event = locate_event(model, t_, g_old, t_new, g_new, state_at, pending_);
+          y_ = (t_event > t_) ? state_at(t_event) : y_;
+          t_ = t_event;
+          return true;
+        }
+        y_ = y_new;
+        // FSAL: f(y1) is reused although the projection moved y1 by O(local error); the
+        // mismatch enters the next step multiplied by dt, below its local error.
+        f_ = attempt.f1;
+        t_ = t_new;
+        previous_error_ = std::max(err, 1e-4);
+        dt_ *= std::min(kMaxGrowth, std::max(kMaxShrink, kSafety / std::max(factor, 1e-10)));
+        return true;
+      }
+      ++this->rejected_;
+      const double shrink = std::isfinite(err) ? std::max(kMaxShrink, kSafety * std::pow(err, -exponent)) : kMaxShrink;
+      dt_ *= std::min(1.0, shrink);
+    }
+  }
+
+  double tolerance_;
+  Method method_;
+  double t_ = 0.0, dt_ = 0.0, previous_error_ = 1e-4;
+  State y_ = State::Zero(), f_ = State::Zero();
+  typename Method::DenseStep dense_;
+  bool has_dense_ = false;
+  Event pending_ = Event::kNone;
+};
+
+}  // namespace spinning_top

@@ -1,0 +1,54 @@
+// Physical parameters and initial conditions of a symmetric top, with validation.
+// Units are SI (REP-103). Symbols follow ../shared/spec/PHYSICS.md.
+#pragma once
+
+#include <stdexcept>
+#include <string>
+
+namespace spinning_top {
+
+/// The rigid body and its environment.
+struct TopParameters {
+  double mass = 0.1;                 ///< m [kg]
+  double inertia_transverse = 4e-5;  ///< A [kg m^2], transverse principal moment about G
+  double inertia_axial = 6e-5;       ///< C [kg m^2], moment about the symmetry axis
+  double tip_distance = 0.02;        ///< h [m], distance from the tip P to the centre of mass G
+  double gravity = 9.80665;          ///< g [m/s^2]
+  double friction = 0.0;             ///< k [N s/m], viscous friction F = -k v_P (viscous scene)
+
+  /// A0 = A + m h^2: transverse moment about the tip (parallel-axis theorem).
+  double inertia_about_tip() const { return inertia_transverse + mass * tip_distance * tip_distance; }
+};
+
+/// Initial state in z-x-z Euler angles (Goldstein): q0 = Rz(heading) Rx(tilt) Rz(spin_angle).
+struct InitialConditions {
+  double tilt = 0.0;             ///< theta0 [rad], angle of the axis from the vertical
+  double precession_rate = 0.0;  ///< phidot0 [rad/s]
+  double nutation_rate = 0.0;    ///< thetadot0 [rad/s]
+  double spin = 0.0;             ///< omega_Z [rad/s], body rate about the axis (constant of motion)
+  double heading = 0.0;          ///< phi0 [rad]
+  double spin_angle = 0.0;       ///< psi0 [rad]
+  double velocity_x = 0.0;       ///< G's horizontal velocity [m/s] (viscous scene only)
+  double velocity_y = 0.0;       ///< G's horizontal velocity [m/s] (viscous scene only)
+};
+
+/// Thrown for a parameter that cannot describe a physical top. parameter() is the
+/// configuration key (e.g. "inertia_axial"), what() says why.
+class InvalidParameter : public std::invalid_argument {
+ public:
+  InvalidParameter(std::string parameter, const std::string& reason)
+      : std::invalid_argument(parameter + ": " + reason), parameter_(std::move(parameter)) {}
+  const std::string& parameter() const { return parameter_; }
+
+ private:
+  std::string parameter_;
+};
+
+/// Throws InvalidParameter unless: all finite; m, A, C > 0; h, g, k >= 0; C <= 2A.
+void validate(const TopParameters& parameters);
+
+/// Throws InvalidParameter unless all values are finite and the axis starts above the
+/// floor (|tilt| < pi/2).
+void validate(const InitialConditions& initial);
+
+}  // namespace spinning_top

@@ -1,0 +1,115 @@
+// Scene "viscous": the tip slides on the floor against viscous friction F = -k v_P
+// (PHYSICS.md). State y = (qw, qx, qy, qz, omega_X, omega_Y, x_G, y_G, vx_G, vy_G, W):
+// attitude, transverse rates, G's horizontal position and velocity, and the work W done
+// against friction (so that the energy balance E(t) + W(t) = E(0) can be checked).
+#pragma once
+
+#include <Eigen/Core>
+
+#include "spinning_top/kinematics.hpp"
+#include "spinning_top/model_outputs.hpp"
+#include "spinning_top/parameters.hpp"
+#include "spinning_top/scenes/sliding_contact.hpp"
+
+namespace spinning_top {
+
+class Viscous {
+ public:
+  static constexpr int kX = 6, kY = 7, kVx = 8, kVy = 9, kWork = 10;
+  static constexpr int kStateSize = 11;
+  static constexpr bool kConservesEnergy = false;
+  static constexpr bool kConservesVerticalAngularMomentum = false;
+  static constexpr const char* kName = "viscous";
+  using State = Eigen::Matrix<double, kStateSize, 1>;
+
+  Viscous(const TopParameters& parameters, const InitialConditions& initial)
+      : parameters_(parameters), initial_(initial), spin_(initial.spin), contact_(parameters, initial.spin) {}
+
+  State initial_state() const {
+    State y;
+    set_initial_attitude_and_rates(initial_, y);
+    const Vector3 axis = initial_attitude(initial_) * Vector3::UnitZ();
+    y[kX] = parameters_.tip_distance * axis.x();  // the tip starts at the origin
+    y[kY] = parameters_.tip_distance * axis.y();
+    y[kVx] = initial_.velocity_x;
+    y[kVy] = initial_.velocity_y;
+    y[kWork] = 0.0;
+    return y;
+  }
+
+  void derivative(const State& y, State& dydt) const {
+    const Evaluation e = evaluate(y);
+    attitude_rate(y, Vector3(y[state_index::kOmegaX], y[state_index::kOmegaY], spin_), dydt);
+    dydt[state_index::kOmegaX] = e.dynamics.transverse_acceleration.x();
+    dydt[state_index::kOmegaY] = e.dynamics.transverse_acceleration.y();
+    dydt[kX] = y[kVx];
+    dydt[kY] = y[kVy];
+    dydt[kVx] = e.friction.x() / parameters_.mass;  // m vx_G' = F_x
+    dydt[kVy] = e.friction.y() / parameters_.mass;
+    dydt[kWork] = -e.friction.dot(e.tip_velocity);  // W' = -F . v_P = k |v_P|^2 >= 0
+  }
+
+  double normal_force(const State& y) const { return evaluate(y).dynamics.normal_force; }
+
+  ModelOutputs outputs(const State& y) const {
+    const Evaluation e = evaluate(y);
+    const Vector3 gamma = vertical_in_body(y);
+    const double wx = y[state_index::kOmegaX], wy = y[state_index::kOmegaY];
+    const double h = parameters_.tip_distance, m = parameters_.mass;
+    const double a = parameters_.inertia_transverse, c = parameters_.inertia_axial;
+    const Vector3 velocity(y[kVx], y[kVy], constrained_vertical_velocity(h, gamma, wx, wy));
+    ModelOutputs out;
+    out.normal_force = e.dynamics.normal_force;
+    out.contact_force = Vector3(e.friction.x(), e.friction.y(), 0.0);
+    out.center_of_mass = Vector3(y[kX], y[kY], h * gamma.z());
+    out.center_of_mass_velocity = velocity;
+    out.contact_point = Vector3(y[kX] - h * e.axis.x(), y[kY] - h * e.axis.y(), 0.0);
+    out.energy = 0.5 * m * velocity.squaredNorm() + 0.5 * (a * (wx * wx + wy * wy) + c * spin_ * spin_) +
+                 m * parameters_.gravity * h * gamma.z();
+    out.vertical_angular_momentum = a * (wx * gamma.x() + wy * gamma.y()) + c * spin_ * gamma.z();
+    out.dissipated_energy = y[kWork];
+    return out;
+  }
+
+  const TopParameters& parameters() const { return parameters_; }
+  const InitialConditions& initial_conditions() const { return initial_; }
+  double spin() const { return spin_; }
+
+ private:
+  struct Evaluation {
+    Vector2 tip_velocity;  // v_P, horizontal world components
+    Vector2 friction;      // F = -k v_P, horizontal world components
+    Vector3 axis;          // e_Z in world components
+    SlidingContact::Result dynamics;
+  };
+
+  /// v_P = v_G - h w x e_Z in world components (PHYSICS.md erratum 3: the vertical part
+  /// cancels by the constraint, the horizontal part must not drop v_Gz's projection),
+  /// then F = -k v_P projected on the body axes for Euler's equations.
+  Evaluation evaluate(const State& y) const {
+    const double w = y[0], x = y[1], yy = y[2], z = y[3];
+    const double wx = y[state_index::kOmegaX], wy = y[state_index::kOmegaY];
+    const double h = parameters_.tip_distance;
+    // Columns e_X, e_Y, e_Z of the rotation matrix of q.
+    const Vector3 ex(1.0 - 2.0 * (yy * yy + z * z), 2.0 * (x * yy + w * z), 2.0 * (x * z - w * yy));
+    const Vector3 ey(2.0 * (x * yy - w * z), 1.0 - 2.0 * (x * x + z * z), 2.0 * (yy * z + w * x));
+    const Vector3 ez(2.0 * (x * z + w * yy), 2.0 * (yy * z - w * x), 1.0 - 2.0 * (x * x + yy * yy));
+    const Vector3 gamma(ex.z(), ey.z(), ez.z());
+    // h w x e_Z = h (wY e_X - wX e_Y).
+    Evaluation e;
+    e.tip_velocity = Vector2(y[kVx] - h * (wy * ex.x() - wx * ey.x()), y[kVy] - h * (wy * ex.y() - wx * ey.y()));
+    e.friction = -parameters_.friction * e.tip_velocity;
+    e.axis = ez;
+    const Vector2 friction_body(e.friction.x() * ex.x() + e.friction.y() * ex.y(),
+                                e.friction.x() * ey.x() + e.friction.y() * ey.y());
+    e.dynamics = contact_.solve(gamma, wx, wy, friction_body);
+    return e;
+  }
+
+  TopParameters parameters_;
+  InitialConditions initial_;
+  double spin_;
+  SlidingContact contact_;
+};
+
+}  // namespace spinning_top
