@@ -1,0 +1,413 @@
+// simulate: the batch front end. Runs one scene faster than real time, without ROS, and writes
+// its trajectory as CSV (issue 2, "Batch simulator"; usage and contract in doc/simulate.md).
+//
+//   simulate --config FILE.yaml [--set key=value]... [--duration SECONDS]
+//            [--output-rate HZ] [--output FILE.csv]
+//
+// Exit codes: 0 success (also when a validity event ends the run early), 1 runtime error
+// unrelated to the input (e.g. the output cannot be written), 2 bad input (options, YAML,
+// keys, values). On exit code 2 nothing is written; a file output appears only complete.
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <yaml-cpp/yaml.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <csignal>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <iostream>
+#include <limits>
+#include <memory>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "spinning_top/config.hpp"
+#include "spinning_top/simulator.hpp"
+
+namespace spinning_top {
+namespace {
+
+constexpr int kExitRuntimeError = 1;
+constexpr int kExitBadInput = 2;
+constexpr double kDefaultDuration = 10.0;    // [s]
+constexpr double kDefaultOutputRate = 100.0;  // [Hz]
+// More rows than this is a typo (and more than a disk holds at ~300 bytes a row).
+constexpr double kMaxOutputIntervals = 1e9;
+
+constexpr const char* kCsvHeader =
+    "t,qw,qx,qy,qz,gx,gy,gz,px,py,normal_force,contact_force_x,contact_force_y,energy,event";
+
+/// Bad input: reported on stderr with exit code 2 before anything is written.
+class UsageError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+struct Options {
+  bool help = false;
+  std::string config_path;
+  std::vector<std::pair<std::string, std::string>> overrides;  ///< --set key=value, in order
+  double duration = kDefaultDuration;
+  double output_rate = kDefaultOutputRate;
+  std::string output_path;  ///< empty: stdout
+};
+
+void print_help(std::ostream& out) {
+  out << "Usage: simulate --config FILE.yaml [--set key=value]... [--duration SECONDS]\n"
+         "                [--output-rate HZ] [--output FILE.csv]\n"
+         "\n"
+         "Runs one spinning-top scene without ROS, faster than real time, and writes its\n"
+         "trajectory as CSV (SI units, REP-103).\n"
+         "\n"
+         "Options:\n"
+         "  --config FILE.yaml   scene file (required), e.g. config/fixed_tip.yaml\n"
+         "  --set key=value      overrides one key of the scene file (repeatable; the last wins)\n"
+         "  --duration SECONDS   simulated time to run, > 0 (default 10)\n"
+         "  --output-rate HZ     output rows per simulated second, > 0 (default 100)\n"
+         "  --output FILE.csv    output file (default: stdout); written to a temporary file\n"
+         "                       and renamed, so it appears only when complete\n"
+         "  --help               this text\n"
+         "Options also take the form --option=value.\n"
+         "\n"
+         "Scene file keys (the node's private parameters). Nested YAML maps flatten with '/':\n"
+         "  initial: {tilt: 0.3}  is the key  initial/tilt. Required keys must be in the file\n"
+         "(or given with --set); the others default as shown. Unknown keys are errors.\n"
+         "\n";
+  std::size_t key_width = 3, unit_width = 4, default_width = 7;
+  for (const ParameterSpec& spec : parameter_specs()) {
+    key_width = std::max(key_width, std::strlen(spec.key));
+    unit_width = std::max(unit_width, std::strlen(spec.unit));
+    default_width = std::max(default_width, std::strlen(spec.default_value));
+  }
+  auto pad = [&out](const std::string& text, std::size_t width) {
+    out << text << std::string(width + 2 - text.size(), ' ');
+  };
+  out << "  ";
+  pad("key", key_width);
+  pad("unit", unit_width);
+  pad("default", default_width);
+  pad("required", 8);
+  out << "description\n";
+  for (const ParameterSpec& spec : parameter_specs()) {
+    out << "  ";
+    pad(spec.key, key_width);
+    pad(*spec.unit ? spec.unit : "-", unit_width);
+    pad(spec.default_value, default_width);
+    pad(spec.required_in_file ? "yes" : "no", 8);
+    out << spec.description << "\n";
+  }
+  out << "\n"
+         "Output: the CSV header\n"
+         "  "
+      << kCsvHeader
+      << "\n"
+         "then one row per output instant t_i = i / rate from t = 0 to the duration inclusive (a\n"
+         "last row at t = duration when it is not a multiple of 1/rate), values with 17\n"
+         "significant digits. q = (qw, qx, qy, qz) is the attitude (body -> world), g = G's\n"
+         "position [m], p = the tip on the floor [m], normal_force R [N], contact_force the\n"
+         "horizontal floor force on the tip [N] (pivot reaction, friction, or 0), energy [J].\n"
+         "event is empty, or lift_off | fallen | non_finite on the last row, at the event time.\n"
+         "\n"
+         "Exit codes: 0 success (also when an event ends the run early), 1 runtime error\n"
+         "(e.g. the output cannot be written), 2 bad input (nothing written).\n";
+}
+
+double parse_option_number(const std::string& option, const std::string& text) {
+  double value = 0.0;
+  try {
+    value = parse_number(option, text);
+  } catch (const InvalidParameter& e) {
+    throw UsageError(e.what());
+  }
+  if (!std::isfinite(value) || !(value > 0.0))
+    throw UsageError(option + ": must be a finite number > 0, got '" + text + "'");
+  return value;
+}
+
+Options parse_options(int argc, char** argv) {
+  Options options;
+  bool seen_duration = false, seen_rate = false, seen_output = false, seen_config = false;
+  for (int i = 1; i < argc; ++i) {
+    std::string name = argv[i];
+    if (name == "--help" || name == "-h") {
+      options.help = true;
+      return options;
+    }
+  }
+  for (int i = 1; i < argc; ++i) {
+    std::string name = argv[i];
+    std::string value;
+    bool has_value = false;
+    if (name.rfind("--", 0) != 0) throw UsageError("unexpected argument '" + name + "' (options start with --)");
+    const std::size_t equals = name.find('=');
+    if (equals != std::string::npos) {
+      value = name.substr(equals + 1);
+      name = name.substr(0, equals);
+      has_value = true;
+    }
+    if (name != "--config" && name != "--set" && name != "--duration" && name != "--output-rate" &&
+        name != "--output")
+      throw UsageError("unknown option '" + name + "'");
+    if (!has_value) {
+      if (i + 1 >= argc) throw UsageError(name + ": missing value");
+      value = argv[++i];
+    }
+    auto once = [&name](bool& seen) {
+      if (seen) throw UsageError(name + ": given twice");
+      seen = true;
+    };
+    if (name == "--config") {
+      once(seen_config);
+      if (value.empty()) throw UsageError("--config: empty file name");
+      options.config_path = value;
+    } else if (name == "--set") {
+      const std::size_t split = value.find('=');
+      if (split == std::string::npos || split == 0)
+        throw UsageError("--set: expected key=value, got '" + value + "'");
+      options.overrides.emplace_back(value.substr(0, split), value.substr(split + 1));
+    } else if (name == "--duration") {
+      once(seen_duration);
+      options.duration = parse_option_number(name, value);
+    } else if (name == "--output-rate") {
+      once(seen_rate);
+      options.output_rate = parse_option_number(name, value);
+    } else {  // --output
+      once(seen_output);
+      if (value.empty()) throw UsageError("--output: empty file name");
+      options.output_path = value;
+    }
+  }
+  if (options.config_path.empty()) throw UsageError("--config FILE.yaml is required");
+  if (!(options.duration * options.output_rate <= kMaxOutputIntervals))
+    throw UsageError("--duration x --output-rate asks for more than 1e9 output rows");
+  return options;
+}
+
+/// Flattens nested YAML maps into "a/b" keys with their scalar text (the key names of
+/// ROS's parameter server, so that a scene file is also a `rosparam load` file).
+void flatten(const YAML::Node& node, const std::string& prefix, const std::string& file, ParameterMap& out) {
+  for (const auto& entry : node) {
+    if (!entry.first.IsScalar()) throw UsageError(file + ": keys must be plain names");
+    const std::string name = entry.first.Scalar();
+    const std::string key = prefix.empty() ? name : prefix + "/" + name;
+    const YAML::Node& value = entry.second;
+    if (value.IsMap()) {
+      flatten(value, key, file, out);
+    } else if (value.IsScalar()) {
+      if (!out.emplace(key, value.Scalar()).second) throw UsageError(key + ": given twice in " + file);
+    } else if (value.IsSequence()) {
+      throw UsageError(key + ": a list is not a valid value (in " + file + ")");
+    } else {
+      throw UsageError(key + ": has no value (in " + file + ")");
+    }
+  }
+}
+
+ParameterMap load_scene_file(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw UsageError("--config: cannot read '" + path + "': " + std::strerror(errno));
+  std::stringstream text;
+  text << in.rdbuf();
+  YAML::Node root;
+  try {
+    root = YAML::Load(text.str());
+  } catch (const YAML::Exception& e) {
+    std::ostringstream where;
+    where << path << ":" << e.mark.line + 1 << ":" << e.mark.column + 1 << ": malformed YAML: " << e.msg;
+    throw UsageError(where.str());
+  }
+  ParameterMap values;
+  if (root.IsNull()) return values;  // an empty file: the missing keys are reported later
+  if (!root.IsMap()) throw UsageError(path + ": the top level must be a map of key: value");
+  flatten(root, "", path, values);
+  return values;
+}
+
+/// The file's keys with the --set overrides applied, parsed and validated.
+SceneConfig read_scene(const Options& options) {
+  ParameterMap values = load_scene_file(options.config_path);
+  ParameterMap origin;
+  for (const auto& [key, value] : values) origin[key] = "in " + options.config_path;
+  for (const auto& [key, value] : options.overrides) {
+    values[key] = value;
+    origin[key] = "from --set " + key + "=" + value;
+  }
+  try {
+    return parse_scene_config(values, /*require_all=*/true);
+  } catch (const InvalidParameter& e) {
+    const auto it = origin.find(e.parameter());
+    throw UsageError(std::string(e.what()) + " (" + (it != origin.end() ? it->second : "in " + options.config_path) +
+                     ")");
+  }
+}
+
+/// The output instants: t_i = i / rate for i = 0..N, N = floor(duration * rate), each a
+/// single division (no accumulated round-off); plus t = duration when that is not one of
+/// them. A relative slack of 1e-9 absorbs decimal round-off, so 0.3 s at 10 Hz is 4 rows.
+class OutputTimes {
+ public:
+  OutputTimes(double duration, double rate) : duration_(duration), rate_(rate) {
+    const double intervals = duration * rate;
+    const double slack = 1e-9 * std::max(1.0, intervals);
+    intervals_ = static_cast<long long>(std::floor(intervals + slack));
+    extra_last_ = intervals - static_cast<double>(intervals_) > slack;
+  }
+  long long rows() const { return intervals_ + 1 + (extra_last_ ? 1 : 0); }
+  double at(long long i) const { return i <= intervals_ ? static_cast<double>(i) / rate_ : duration_; }
+
+ private:
+  double duration_, rate_;
+  long long intervals_ = 0;
+  bool extra_last_ = false;
+};
+
+void write_row(std::FILE* out, double t, const Snapshot& s, Event event) {
+  const Quaternion& q = s.attitude;
+  const ModelOutputs& o = s.outputs;
+  const double values[] = {t,
+                           q.w(),
+                           q.x(),
+                           q.y(),
+                           q.z(),
+                           o.center_of_mass.x(),
+                           o.center_of_mass.y(),
+                           o.center_of_mass.z(),
+                           o.contact_point.x(),
+                           o.contact_point.y(),
+                           o.normal_force,
+                           o.contact_force.x(),
+                           o.contact_force.y(),
+                           o.energy};
+  for (double v : values) std::fprintf(out, "%.17g,", v);
+  std::fprintf(out, "%s\n", to_string(event));
+}
+
+/// Runs the scene and writes the header and every row; returns the event that ended it.
+Event run(Simulator& simulator, const OutputTimes& times, std::FILE* out) {
+  std::fprintf(out, "%s\n", kCsvHeader);
+  // An initial state that already violates the model is an event at t = 0.
+  Event event = simulator.event();
+  write_row(out, 0.0, simulator.snapshot(), event);
+  for (long long i = 1; i < times.rows() && event == Event::kNone; ++i) {
+    const double t = times.at(i);
+    event = simulator.advance_to(t);
+    // On an event, time() is the event time, which replaces the scheduled instant.
+    write_row(out, event == Event::kNone ? t : simulator.time(), simulator.snapshot(), event);
+  }
+  return event;
+}
+
+// The temporary output file, removed if a signal ends the run (unlink is async-signal-safe).
+char g_temporary_path[4096] = {0};
+
+extern "C" void remove_temporary_and_exit(int signal_number) {
+  if (g_temporary_path[0] != '\0') unlink(g_temporary_path);
+  std::signal(signal_number, SIG_DFL);
+  std::raise(signal_number);
+}
+
+/// Writes through a temporary file in the destination's directory and renames it into
+/// place, so readers never see a partial file and a failed run leaves none.
+class AtomicOutputFile {
+ public:
+  explicit AtomicOutputFile(const std::string& path) : path_(path), temporary_(path + ".tmp.XXXXXX") {
+    if (temporary_.size() >= sizeof(g_temporary_path))
+      throw std::runtime_error("--output: path too long: '" + path + "'");
+    const int fd = mkstemp(temporary_.data());
+    if (fd < 0)
+      throw std::runtime_error("--output: cannot create a file beside '" + path + "': " + std::strerror(errno));
+    std::strcpy(g_temporary_path, temporary_.c_str());
+    // mkstemp makes the file 0600; give it the permissions an ordinary new file would get.
+    const mode_t mask = umask(0);
+    umask(mask);
+    fchmod(fd, 0666 & ~mask);
+    file_ = fdopen(fd, "w");
+    if (file_ == nullptr) {
+      close(fd);
+      discard();
+      throw std::runtime_error("cannot open '" + temporary_ + "': " + std::strerror(errno));
+    }
+    std::setvbuf(file_, nullptr, _IOFBF, 1 << 20);
+  }
+  ~AtomicOutputFile() {
+    if (file_ != nullptr) std::fclose(file_);
+    if (!committed_) discard();
+  }
+  AtomicOutputFile(const AtomicOutputFile&) = delete;
+  AtomicOutputFile& operator=(const AtomicOutputFile&) = delete;
+
+  std::FILE* stream() { return file_; }
+
+  void commit() {
+    const bool write_failed = std::ferror(file_) != 0;
+    const int close_status = std::fclose(file_);
+    file_ = nullptr;
+    if (write_failed || close_status != 0)
+      throw std::runtime_error("cannot write '" + temporary_ + "': " + std::strerror(errno));
+    if (std::rename(temporary_.c_str(), path_.c_str()) != 0)
+      throw std::runtime_error("cannot rename '" + temporary_ + "' to '" + path_ + "': " + std::strerror(errno));
+    committed_ = true;
+    g_temporary_path[0] = '\0';
+  }
+
+ private:
+  void discard() {
+    unlink(temporary_.c_str());
+    g_temporary_path[0] = '\0';
+  }
+
+  std::string path_;
+  std::string temporary_;
+  std::FILE* file_ = nullptr;
+  bool committed_ = false;
+};
+
+int main_with_exit_code(int argc, char** argv) {
+  Options options;
+  std::unique_ptr<Simulator> simulator;
+  try {
+    options = parse_options(argc, argv);
+    if (options.help) {
+      print_help(std::cout);
+      return 0;
+    }
+    simulator = make_simulator(read_scene(options));
+  } catch (const UsageError& e) {
+    std::cerr << "simulate: error: " << e.what() << "\nTry 'simulate --help' for the options and keys.\n";
+    return kExitBadInput;
+  } catch (const InvalidParameter& e) {
+    std::cerr << "simulate: error: " << e.what() << "\n";
+    return kExitBadInput;
+  }
+
+  const OutputTimes times(options.duration, options.output_rate);
+  try {
+    if (options.output_path.empty()) {
+      run(*simulator, times, stdout);
+      if (std::fflush(stdout) != 0 || std::ferror(stdout))
+        throw std::runtime_error(std::string("cannot write to stdout: ") + std::strerror(errno));
+    } else {
+      for (int signal_number : {SIGINT, SIGTERM, SIGHUP}) std::signal(signal_number, remove_temporary_and_exit);
+      AtomicOutputFile output(options.output_path);
+      run(*simulator, times, output.stream());
+      output.commit();
+    }
+  } catch (const std::exception& e) {
+    std::cerr << "simulate: error: " << e.what() << "\n";
+    return kExitRuntimeError;
+  }
+  return 0;
+}
+
+}  // namespace
+}  // namespace spinning_top
+
+int main(int argc, char** argv) { return spinning_top::main_with_exit_code(argc, argv); }
