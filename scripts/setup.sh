@@ -9,7 +9,7 @@ source "$(dirname "$0")/env.sh"
 packages=(
   build-essential cmake pkg-config
   catkin ros-core-dev python3-catkin-pkg python3-rospkg python3-rostest python3-rosunit
-  python3-roslaunch python3-rosbag librosbag-dev
+  python3-roslaunch python3-rosbag librosbag-dev rosbash
   libeigen3-dev libboost-dev libyaml-cpp-dev libgtest-dev googletest
   libtf2-ros-dev libtf2-eigen-dev python3-tf2-msgs
   libgeometry-msgs-dev python3-geometry-msgs
