@@ -1,0 +1,89 @@
+#include "spinning_top/ros/ros_parameters.hpp"
+
+#include <xmlrpcpp/XmlRpcValue.h>
+
+#include <cstdio>
+#include <cstdlib>
+
+namespace spinning_top {
+namespace ros_front_end {
+namespace {
+
+const char* type_name(XmlRpc::XmlRpcValue::Type type) {
+  switch (type) {
+    case XmlRpc::XmlRpcValue::TypeBoolean: return "a boolean";
+    case XmlRpc::XmlRpcValue::TypeInt: return "an integer";
+    case XmlRpc::XmlRpcValue::TypeDouble: return "a number";
+    case XmlRpc::XmlRpcValue::TypeString: return "a string";
+    case XmlRpc::XmlRpcValue::TypeArray: return "a list";
+    case XmlRpc::XmlRpcValue::TypeStruct: return "a dictionary";
+    default: return "of an unsupported type";
+  }
+}
+
+std::string number_text(double value) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, "%.17g", value);  // round-trips every double exactly
+  return buffer;
+}
+
+/// Whether a key's documented default is a number (then the key takes numbers).
+bool is_number(const char* text) {
+  char* end = nullptr;
+  std::strtod(text, &end);
+  return end != text && *end == '\0';
+}
+
+}  // namespace
+
+ParameterMap read_scene_parameters(const ros::NodeHandle& private_nh) {
+  ParameterMap values;
+  for (const ParameterSpec& spec : parameter_specs()) {
+    XmlRpc::XmlRpcValue value;
+    if (!private_nh.getParam(spec.key, value)) continue;
+    const bool is_text = !is_number(spec.default_value);  // scene, integrator: names
+    switch (value.getType()) {
+      case XmlRpc::XmlRpcValue::TypeDouble:
+        if (!is_text) { values[spec.key] = number_text(static_cast<double>(value)); continue; }
+        break;
+      case XmlRpc::XmlRpcValue::TypeInt:
+        if (!is_text) { values[spec.key] = std::to_string(static_cast<int>(value)); continue; }
+        break;
+      case XmlRpc::XmlRpcValue::TypeString:
+        // A number given as a string ("0.1") is passed on: parse_scene_config says if it is not one.
+        values[spec.key] = static_cast<std::string>(value);
+        continue;
+      default:
+        break;
+    }
+    throw InvalidParameter(spec.key, std::string("is ") + type_name(value.getType()) + ", expected " +
+                                         (is_text ? "a string" : "a number") + " (" + spec.description + ")");
+  }
+  return values;
+}
+
+double read_number(const ros::NodeHandle& private_nh, const std::string& key, double default_value) {
+  XmlRpc::XmlRpcValue value;
+  if (!private_nh.getParam(key, value)) return default_value;
+  if (value.getType() == XmlRpc::XmlRpcValue::TypeDouble) return static_cast<double>(value);
+  if (value.getType() == XmlRpc::XmlRpcValue::TypeInt) return static_cast<int>(value);
+  throw InvalidParameter(key, std::string("is ") + type_name(value.getType()) + ", expected a number");
+}
+
+std::string read_string(const ros::NodeHandle& private_nh, const std::string& key,
+                        const std::string& default_value) {
+  XmlRpc::XmlRpcValue value;
+  if (!private_nh.getParam(key, value)) return default_value;
+  if (value.getType() == XmlRpc::XmlRpcValue::TypeString) return static_cast<std::string>(value);
+  throw InvalidParameter(key, std::string("is ") + type_name(value.getType()) + ", expected a string");
+}
+
+bool read_bool(const ros::NodeHandle& private_nh, const std::string& key, bool default_value) {
+  XmlRpc::XmlRpcValue value;
+  if (!private_nh.getParam(key, value)) return default_value;
+  if (value.getType() == XmlRpc::XmlRpcValue::TypeBoolean) return static_cast<bool>(value);
+  throw InvalidParameter(key, std::string("is ") + type_name(value.getType()) + ", expected true or false");
+}
+
+}  // namespace ros_front_end
+}  // namespace spinning_top

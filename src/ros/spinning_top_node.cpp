@@ -1,0 +1,524 @@
+#include "spinning_top/ros/spinning_top_node.hpp"
+
+#include <geometry_msgs/PointStamped.h>
+#include <geometry_msgs/TransformStamped.h>
+#include <geometry_msgs/WrenchStamped.h>
+#include <rosgraph_msgs/Clock.h>
+#include <std_msgs/String.h>
+#include <visualization_msgs/MarkerArray.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+#include "spinning_top/ros/ros_parameters.hpp"
+
+namespace spinning_top {
+namespace ros_front_end {
+namespace {
+
+constexpr double kMaxRate = 100000.0;  // [Hz] beyond this the tick cost alone exceeds the period
+constexpr double kAsFastAsPossibleSlice = 1e-3;  // [s] wall time per timer callback when rtf = 0
+
+std::string format(const char* pattern, double value) {
+  char buffer[64];
+  std::snprintf(buffer, sizeof buffer, pattern, value);
+  return buffer;
+}
+
+void require(bool condition, const std::string& key, const std::string& reason) {
+  if (!condition) throw InvalidParameter(key, reason);
+}
+
+void require_frame(const std::string& key, const std::string& frame) {
+  require(!frame.empty(), key, "must not be empty");
+  require(frame[0] != '/', key, "'" + frame + "' must not start with '/' (tf2 frame ids have no leading slash)");
+}
+
+bool finite(const Vector3& v) { return v.allFinite(); }
+
+bool finite(const Snapshot& s) {
+  const ModelOutputs& o = s.outputs;
+  return std::isfinite(s.time) && s.attitude.coeffs().allFinite() && finite(o.center_of_mass) &&
+         finite(o.contact_point) && finite(o.contact_force) && std::isfinite(o.normal_force);
+}
+
+geometry_msgs::Point to_point(const Vector3& v) {
+  geometry_msgs::Point p;
+  p.x = v.x();
+  p.y = v.y();
+  p.z = v.z();
+  return p;
+}
+
+std_msgs::ColorRGBA color(float r, float g, float b, float a = 1.0f) {
+  std_msgs::ColorRGBA c;
+  c.r = r;
+  c.g = g;
+  c.b = b;
+  c.a = a;
+  return c;
+}
+
+/// The uniform solid cylinder with the top's m, A and C: C = m r^2 / 2 and
+/// A = m (3 r^2 + L^2) / 12 about G give r = sqrt(2C/m), L = sqrt(6 (2A - C) / m);
+/// C <= 2A (validated by the core) keeps L real.
+struct EquivalentCylinder {
+  double radius, length;
+};
+
+EquivalentCylinder equivalent_cylinder(const TopParameters& top) {
+  return {std::sqrt(2.0 * top.inertia_axial / top.mass),
+          std::sqrt(std::max(0.0, 6.0 * (2.0 * top.inertia_transverse - top.inertia_axial) / top.mass))};
+}
+
+}  // namespace
+
+NodeSettings read_node_settings(const ros::NodeHandle& nh) {
+  NodeSettings s;
+  s.rate = read_number(nh, "rate", s.rate);
+  require(std::isfinite(s.rate) && s.rate > 0.0 && s.rate <= kMaxRate, "rate",
+          format("must lie in (0, %g] Hz", kMaxRate));
+  s.real_time_factor = read_number(nh, "real_time_factor", s.real_time_factor);
+  require(std::isfinite(s.real_time_factor) && s.real_time_factor >= 0.0, "real_time_factor",
+          "must be finite and >= 0 (0 = as fast as possible)");
+  s.publish_clock = read_bool(nh, "publish_clock", s.publish_clock);
+  s.start_paused = read_bool(nh, "start_paused", s.start_paused);
+  s.world_frame = read_string(nh, "world_frame", s.world_frame);
+  s.body_frame = read_string(nh, "body_frame", s.body_frame);
+  s.contact_frame = read_string(nh, "contact_frame", s.contact_frame);
+  require_frame("world_frame", s.world_frame);
+  require_frame("body_frame", s.body_frame);
+  require_frame("contact_frame", s.contact_frame);
+  require(s.body_frame != s.world_frame && s.contact_frame != s.world_frame && s.contact_frame != s.body_frame,
+          "body_frame", "world_frame, body_frame and contact_frame must differ");
+  s.marker_rate = read_number(nh, "marker_rate", s.marker_rate);
+  require(std::isfinite(s.marker_rate) && s.marker_rate > 0.0, "marker_rate", "must be > 0 Hz");
+  const double trace_length = read_number(nh, "trace_length", s.trace_length);
+  require(trace_length >= 0.0 && trace_length <= 1e6 && trace_length == std::floor(trace_length), "trace_length",
+          "must be a whole number of points in [0, 1e6]");
+  s.trace_length = static_cast<int>(trace_length);
+  s.trace_resolution = read_number(nh, "trace_resolution", s.trace_resolution);
+  require(std::isfinite(s.trace_resolution) && s.trace_resolution >= 0.0, "trace_resolution", "must be >= 0 m");
+  s.force_scale = read_number(nh, "force_scale", s.force_scale);
+  require(std::isfinite(s.force_scale) && s.force_scale > 0.0, "force_scale", "must be > 0 m/N");
+  s.energy_drift_warning = read_number(nh, "energy_drift_warning", s.energy_drift_warning);
+  s.energy_drift_error = read_number(nh, "energy_drift_error", s.energy_drift_error);
+  require(s.energy_drift_warning > 0.0 && std::isfinite(s.energy_drift_warning), "energy_drift_warning", "must be > 0");
+  require(s.energy_drift_error >= s.energy_drift_warning && std::isfinite(s.energy_drift_error), "energy_drift_error",
+          "must be finite and >= energy_drift_warning");
+  s.quaternion_norm_error = read_number(nh, "quaternion_norm_error", s.quaternion_norm_error);
+  require(s.quaternion_norm_error > 0.0, "quaternion_norm_error", "must be > 0");
+  s.constraint_error = read_number(nh, "constraint_error", s.constraint_error);
+  require(s.constraint_error > 0.0, "constraint_error", "must be > 0 m");
+  return s;
+}
+
+SpinningTopNode::SpinningTopNode(ros::NodeHandle nh, ros::NodeHandle private_nh)
+    : nh_(nh), private_nh_(private_nh) {
+  // Everything is read and validated before anything is advertised.
+  settings_ = read_node_settings(private_nh_);
+  simulator_ = make_simulator(parse_scene_config(read_scene_parameters(private_nh_), /*require_all=*/false));
+  paused_ = settings_.start_paused;
+  // Under use_sim_time our own /clock is the time base and starts at the first tick (never
+  // 0); otherwise stamps start at the wall time of the start, so that tf users on wall time
+  // see current transforms at real_time_factor 1.
+  stamp_origin_ = ros::Time::isSimTime() ? ros::Time(0, 0) : ros::Time::now();
+  last_stamp_ = stamp_origin_;
+  rebaseline_energy();
+
+  // dynamic_reconfigure starts from what is on the parameter server: put the effective
+  // values there (the scene's documented defaults included), so its first callback
+  // changes nothing.
+  const SceneConfig& config = simulator_->config();
+  private_nh_.setParam("friction", config.top.friction);
+  private_nh_.setParam("gravity", config.top.gravity);
+  private_nh_.setParam("tolerance", config.integrator.tolerance);
+  private_nh_.setParam("step", config.integrator.step);
+  private_nh_.setParam("rate", settings_.rate);
+  private_nh_.setParam("real_time_factor", settings_.real_time_factor);
+
+  if (settings_.publish_clock) clock_publisher_ = nh_.advertise<rosgraph_msgs::Clock>("/clock", 10);
+  contact_point_publisher_ = private_nh_.advertise<geometry_msgs::PointStamped>("contact_point", 100);
+  normal_force_publisher_ = private_nh_.advertise<geometry_msgs::WrenchStamped>("normal_force", 100);
+  marker_publisher_ = private_nh_.advertise<visualization_msgs::MarkerArray>("markers", 10);
+  event_publisher_ = private_nh_.advertise<std_msgs::String>("event", 1, /*latch=*/true);
+  tf_broadcaster_ = std::make_unique<tf2_ros::TransformBroadcaster>();
+
+  reset_service_ = private_nh_.advertiseService("reset", &SpinningTopNode::on_reset, this);
+  pause_service_ = private_nh_.advertiseService("pause", &SpinningTopNode::on_pause, this);
+  resume_service_ = private_nh_.advertiseService("resume", &SpinningTopNode::on_resume, this);
+  step_service_ = private_nh_.advertiseService("step", &SpinningTopNode::on_step, this);
+
+  diagnostics_ = std::make_unique<diagnostic_updater::Updater>(nh_, private_nh_);
+  diagnostics_->setHardwareID(std::string("spinning_top/") + to_string(config.scene));
+  diagnostics_->add("simulation", this, &SpinningTopNode::diagnose);
+
+  reconfigure_server_ = std::make_unique<dynamic_reconfigure::Server<SpinningTopConfig>>(private_nh_);
+  reconfigure_server_->setCallback(
+      [this](SpinningTopConfig& c, uint32_t level) { reconfigure(c, level); });
+
+  window_wall_start_ = ros::WallTime::now();
+  restart_timer();
+  diagnostics_timer_ = nh_.createWallTimer(ros::WallDuration(1.0), &SpinningTopNode::on_diagnostics_timer, this);
+  ROS_INFO("spinning_top: scene %s, %s, %g Hz, real-time factor %g%s", to_string(config.scene),
+           simulator_->integrator_description().c_str(), settings_.rate, settings_.real_time_factor,
+           paused_ ? " (paused)" : "");
+}
+
+void SpinningTopNode::restart_timer() {
+  const double period = settings_.real_time_factor > 0.0 ? 1.0 / (settings_.rate * settings_.real_time_factor)
+                                                         : kAsFastAsPossibleSlice;
+  ticks_per_marker_ = std::max(1L, std::lround(settings_.rate / settings_.marker_rate));
+  if (timer_.isValid()) {
+    timer_.setPeriod(ros::WallDuration(period));
+  } else {
+    timer_ = nh_.createWallTimer(ros::WallDuration(period), &SpinningTopNode::on_timer, this);
+  }
+}
+
+void SpinningTopNode::on_timer(const ros::WallTimerEvent& event) {
+  if (paused_) return;
+  if (settings_.real_time_factor == 0.0) {
+    // As fast as possible: ticks back to back for one slice, then back to the callback
+    // queue so that services and dynamic_reconfigure are served.
+    const ros::WallTime start = ros::WallTime::now();
+    ros::WallTime now = start;
+    while (!paused_ && (now - start).toSec() < kAsFastAsPossibleSlice) {
+      tick();
+      const ros::WallTime end = ros::WallTime::now();
+      const double cost = (end - now).toSec();
+      tick_cost_sum_ += cost;
+      tick_cost_max_ = std::max(tick_cost_max_, cost);
+      ++ticks_in_window_;
+      now = end;
+    }
+    return;
+  }
+  // An overrun: this tick started more than a whole period after its slot (the previous
+  // one, or the machine, could not keep up). The timer then drops the missed slots, so the
+  // achieved real-time factor falls below the requested one; simulated time per tick stays 1/rate.
+  const double period = 1.0 / (settings_.rate * settings_.real_time_factor);
+  if ((event.current_real - event.current_expected).toSec() > period) ++overruns_;
+  const ros::WallTime start = ros::WallTime::now();
+  tick();
+  const double cost = (ros::WallTime::now() - start).toSec();
+  tick_cost_sum_ += cost;
+  tick_cost_max_ = std::max(tick_cost_max_, cost);
+  ++ticks_in_window_;
+}
+
+void SpinningTopNode::tick() {
+  ++ticks_since_anchor_;
+  ++tick_count_;
+  const double previous_target = target_time_;
+  target_time_ = anchor_time_ + static_cast<double>(ticks_since_anchor_) / settings_.rate;
+  sim_time_in_window_ += target_time_ - previous_target;
+  if (simulator_->event() == Event::kNone) {
+    const Event event = simulator_->advance_to(target_time_);
+    if (event != Event::kNone) handle_event(event);
+  }
+  const ros::Time stamp = stamp_origin_ + ros::Duration(target_time_);
+  if (stamp <= last_stamp_) return;  // never twice the same stamp (tf2 TF_REPEATED_DATA)
+  last_stamp_ = stamp;
+  const Snapshot snapshot = simulator_->snapshot();
+  if (!finite(snapshot)) {  // the core promises this never happens; never pass it on
+    ROS_ERROR_ONCE("spinning_top: non-finite state at t = %.9g s not published", snapshot.time);
+    return;
+  }
+  publish(snapshot, stamp);
+}
+
+void SpinningTopNode::publish(const Snapshot& s, const ros::Time& stamp) {
+  const ModelOutputs& out = s.outputs;
+  if (settings_.publish_clock) {
+    rosgraph_msgs::Clock clock;
+    clock.clock = stamp;
+    clock_publisher_.publish(clock);
+  }
+
+  std::vector<geometry_msgs::TransformStamped> transforms(2);
+  geometry_msgs::TransformStamped& body = transforms[0];
+  body.header.stamp = stamp;
+  body.header.frame_id = settings_.world_frame;
+  body.child_frame_id = settings_.body_frame;
+  body.transform.translation.x = out.center_of_mass.x();
+  body.transform.translation.y = out.center_of_mass.y();
+  body.transform.translation.z = out.center_of_mass.z();
+  body.transform.rotation.w = s.attitude.w();
+  body.transform.rotation.x = s.attitude.x();
+  body.transform.rotation.y = s.attitude.y();
+  body.transform.rotation.z = s.attitude.z();
+  // The contact frame: at the tip, axes parallel to the world's, so that the floor force
+  // (in world components) is drawn by rviz where it acts.
+  geometry_msgs::TransformStamped& contact = transforms[1];
+  contact.header = body.header;
+  contact.child_frame_id = settings_.contact_frame;
+  contact.transform.translation.x = out.contact_point.x();
+  contact.transform.translation.y = out.contact_point.y();
+  contact.transform.translation.z = out.contact_point.z();
+  contact.transform.rotation.w = 1.0;
+  tf_broadcaster_->sendTransform(transforms);
+
+  geometry_msgs::PointStamped point;
+  point.header = body.header;
+  point.point = to_point(out.contact_point);
+  contact_point_publisher_.publish(point);
+
+  geometry_msgs::WrenchStamped wrench;
+  wrench.header.stamp = stamp;
+  wrench.header.frame_id = settings_.contact_frame;
+  wrench.wrench.force.x = out.contact_force.x();  // pivot reaction or friction; 0 when frictionless
+  wrench.wrench.force.y = out.contact_force.y();
+  wrench.wrench.force.z = out.normal_force;
+  normal_force_publisher_.publish(wrench);  // torque about the tip: 0 (a point contact)
+
+  if (settings_.trace_length > 0 &&
+      (trace_.empty() || (trace_.back() - out.contact_point).norm() >= settings_.trace_resolution)) {
+    trace_.push_back(out.contact_point);
+    while (static_cast<int>(trace_.size()) > settings_.trace_length) trace_.pop_front();
+  }
+  if (tick_count_ % ticks_per_marker_ == 0) publish_markers(s, stamp);
+}
+
+void SpinningTopNode::publish_markers(const Snapshot& s, const ros::Time& stamp) {
+  const ModelOutputs& out = s.outputs;
+  const TopParameters& top = simulator_->config().top;
+  const EquivalentCylinder cylinder = equivalent_cylinder(top);
+  visualization_msgs::MarkerArray array;
+
+  visualization_msgs::Marker marker;
+  marker.header.stamp = stamp;
+  marker.header.frame_id = settings_.body_frame;
+  marker.frame_locked = true;  // rviz keeps it on the body frame between our messages
+  marker.action = visualization_msgs::Marker::ADD;
+  marker.pose.orientation.w = 1.0;
+
+  // The body: the cylinder with the top's inertia, centred at G ...
+  marker.ns = "body";
+  marker.id = 0;
+  marker.type = visualization_msgs::Marker::CYLINDER;
+  marker.scale.x = marker.scale.y = 2.0 * cylinder.radius;
+  marker.scale.z = std::max(cylinder.length, 1e-4);
+  marker.color = color(0.85f, 0.33f, 0.1f);
+  array.markers.push_back(marker);
+  // ... and a spindle from the tip (z = -h) up through it.
+  const double spindle_top = 0.5 * cylinder.length + 0.3 * (top.tip_distance + 0.5 * cylinder.length);
+  marker.id = 1;
+  marker.scale.x = marker.scale.y = std::max(0.15 * cylinder.radius, 1e-4);
+  marker.scale.z = std::max(spindle_top + top.tip_distance, 1e-4);
+  marker.pose.position.z = 0.5 * (spindle_top - top.tip_distance);
+  marker.color = color(0.3f, 0.3f, 0.35f);
+  array.markers.push_back(marker);
+
+  // The tip's trace on the floor (world frame, bounded).
+  visualization_msgs::Marker trace;
+  trace.header.stamp = stamp;
+  trace.header.frame_id = settings_.world_frame;
+  trace.ns = "trace";
+  trace.id = 0;
+  trace.type = visualization_msgs::Marker::LINE_STRIP;
+  trace.action = visualization_msgs::Marker::ADD;
+  trace.pose.orientation.w = 1.0;
+  trace.scale.x = 0.0005;  // line width [m]
+  trace.color = color(0.1f, 0.5f, 0.9f);
+  for (const Vector3& p : trace_) trace.points.push_back(to_point(p));
+  trace.points.push_back(to_point(out.contact_point));
+  if (trace.points.size() < 2) trace.points.push_back(trace.points.back());
+  array.markers.push_back(trace);
+
+  // The floor's force on the tip, from the tip (world frame, force_scale m/N).
+  visualization_msgs::Marker arrow = trace;
+  arrow.ns = "force";
+  arrow.type = visualization_msgs::Marker::ARROW;
+  arrow.points.clear();
+  const Vector3 force(out.contact_force.x(), out.contact_force.y(), out.normal_force);
+  arrow.points.push_back(to_point(out.contact_point));
+  arrow.points.push_back(to_point(out.contact_point + settings_.force_scale * force));
+  arrow.scale.x = 0.002;  // shaft diameter
+  arrow.scale.y = 0.004;  // head diameter
+  arrow.scale.z = 0.006;  // head length
+  arrow.color = color(0.2f, 0.8f, 0.2f);
+  array.markers.push_back(arrow);
+
+  marker_publisher_.publish(array);
+}
+
+void SpinningTopNode::handle_event(Event event) {
+  reported_event_ = event;
+  event_time_ = simulator_->time();
+  ROS_ERROR("spinning_top: %s at t = %.9g s (simulated): integration stopped; the last valid pose is "
+            "kept. Call ~reset to start again.",
+            to_string(event), event_time_);
+  std_msgs::String message;
+  message.data = to_string(event);
+  event_publisher_.publish(message);
+  if (diagnostics_) diagnostics_->force_update();
+}
+
+void SpinningTopNode::rebaseline_energy() {
+  const ModelOutputs out = simulator_->snapshot().outputs;
+  energy_baseline_ = out.energy + out.dissipated_energy;
+}
+
+void SpinningTopNode::on_diagnostics_timer(const ros::WallTimerEvent&) { diagnostics_->force_update(); }
+
+void SpinningTopNode::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) {
+  using diagnostic_msgs::DiagnosticStatus;
+  const Snapshot s = simulator_->snapshot();
+  const ModelOutputs& out = s.outputs;
+  const TopParameters& top = simulator_->config().top;
+
+  // Energy balance E + W - E0 (W: work done against friction; 0 without friction).
+  const double drift = (out.energy + out.dissipated_energy - energy_baseline_) /
+                       std::max(std::abs(energy_baseline_), 1e-300);
+  const double norm_error = std::abs(s.attitude.norm() - 1.0);
+  // Contact constraint z_G = h e_Zz (PHYSICS.md), and the pivot at the origin (fixed tip).
+  const Vector3 axis = s.attitude * Vector3::UnitZ();
+  double constraint = std::abs(out.center_of_mass.z() - top.tip_distance * axis.z());
+  constraint = std::max(constraint, std::abs(out.contact_point.z()));
+  if (simulator_->config().scene == SceneType::kFixedTip)
+    constraint = std::max(constraint, out.contact_point.head<2>().norm());
+
+  const ros::WallTime now = ros::WallTime::now();
+  const double wall = (now - window_wall_start_).toSec();
+  const double achieved_rtf = wall > 0.0 ? sim_time_in_window_ / wall : 0.0;
+  const double mean_cost = ticks_in_window_ > 0 ? tick_cost_sum_ / ticks_in_window_ : 0.0;
+  const long overruns_in_window = overruns_ - overruns_at_window_start_;
+
+  status.summary(DiagnosticStatus::OK, paused_ ? "paused" : "running");
+  if (overruns_in_window > 0)
+    status.mergeSummaryf(DiagnosticStatus::WARN, "%ld overruns in the last %.1f s", overruns_in_window, wall);
+  if (std::abs(drift) > settings_.energy_drift_error)
+    status.mergeSummaryf(DiagnosticStatus::ERROR, "energy drift %.3g", drift);
+  else if (std::abs(drift) > settings_.energy_drift_warning)
+    status.mergeSummaryf(DiagnosticStatus::WARN, "energy drift %.3g", drift);
+  if (norm_error > settings_.quaternion_norm_error)
+    status.mergeSummaryf(DiagnosticStatus::ERROR, "quaternion norm off by %.3g", norm_error);
+  if (constraint > settings_.constraint_error)
+    status.mergeSummaryf(DiagnosticStatus::ERROR, "contact constraint residual %.3g m", constraint);
+  if (reported_event_ != Event::kNone)
+    status.mergeSummaryf(DiagnosticStatus::ERROR, "event %s at t = %.9g s", to_string(reported_event_), event_time_);
+
+  status.add("scene", to_string(simulator_->config().scene));
+  status.add("integrator", simulator_->integrator_description());
+  status.add("integrator steps since reset", simulator_->steps());
+  status.addf("simulated time [s]", "%.9g", s.time);
+  status.add("event", reported_event_ == Event::kNone ? "none" : to_string(reported_event_));
+  if (reported_event_ != Event::kNone) status.addf("event time [s]", "%.9g", event_time_);
+  status.addf("energy [J]", "%.12g", out.energy);
+  status.addf("dissipated energy [J]", "%.12g", out.dissipated_energy);
+  status.addf("energy balance (E + W - E0) / |E0|", "%.3g", drift);
+  status.addf("quaternion norm error", "%.3g", norm_error);
+  status.addf("constraint residual [m]", "%.3g", constraint);
+  status.addf("normal force [N]", "%.9g", out.normal_force);
+  status.addf("rate [Hz]", "%g", settings_.rate);
+  status.addf("requested real-time factor", "%g", settings_.real_time_factor);
+  status.addf("achieved real-time factor", "%.3f", achieved_rtf);
+  status.add("overruns (total)", overruns_);
+  status.add("overruns (window)", overruns_in_window);
+  status.addf("tick cost mean [us]", "%.1f", 1e6 * mean_cost);
+  status.addf("tick cost max [us]", "%.1f", 1e6 * tick_cost_max_);
+  status.add("ticks (window)", ticks_in_window_);
+
+  window_wall_start_ = now;
+  sim_time_in_window_ = 0.0;
+  ticks_in_window_ = 0;
+  tick_cost_sum_ = tick_cost_max_ = 0.0;
+  overruns_at_window_start_ = overruns_;
+}
+
+void SpinningTopNode::reconfigure(SpinningTopConfig& config, uint32_t /*level*/) {
+  if (!reconfigure_initialized_) applied_config_ = config;  // the values we put on the server
+  reconfigure_initialized_ = true;
+  auto refuse = [&](const std::string& why) {
+    ROS_ERROR("spinning_top: dynamic_reconfigure update refused: %s. The previous configuration stays.",
+              why.c_str());
+    config = applied_config_;  // sent back to the client as the current configuration
+  };
+  if (!(std::isfinite(config.rate) && config.rate > 0.0 && config.rate <= kMaxRate))
+    return refuse(format("rate: must lie in (0, %g] Hz", kMaxRate));
+  if (!(std::isfinite(config.real_time_factor) && config.real_time_factor >= 0.0))
+    return refuse("real_time_factor: must be finite and >= 0 (0 = as fast as possible)");
+
+  TopParameters top = simulator_->config().top;
+  IntegratorSettings integrator = simulator_->config().integrator;
+  top.friction = config.friction;
+  top.gravity = config.gravity;
+  integrator.tolerance = config.tolerance;
+  integrator.step = config.step;
+  const TopParameters& old_top = simulator_->config().top;
+  const IntegratorSettings& old_integrator = simulator_->config().integrator;
+  const bool physics_changed = top.friction != old_top.friction || top.gravity != old_top.gravity ||
+                               integrator.tolerance != old_integrator.tolerance ||
+                               integrator.step != old_integrator.step;
+  if (physics_changed) {
+    try {
+      simulator_->update(top, integrator);  // validates; changes nothing if it throws
+    } catch (const InvalidParameter& error) {
+      return refuse(error.what());
+    }
+    rebaseline_energy();
+  }
+  if (config.rate != settings_.rate || config.real_time_factor != settings_.real_time_factor) {
+    // Re-anchor so that the next tick is exactly one new period after the last one.
+    anchor_time_ = target_time_;
+    ticks_since_anchor_ = 0;
+    settings_.rate = config.rate;
+    settings_.real_time_factor = config.real_time_factor;
+    restart_timer();
+  }
+  applied_config_ = config;
+  ROS_INFO("spinning_top: configuration: k %g N s/m, g %g m/s^2, %s, %g Hz, real-time factor %g", config.friction,
+           config.gravity, simulator_->integrator_description().c_str(), config.rate, config.real_time_factor);
+}
+
+bool SpinningTopNode::on_reset(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& response) {
+  simulator_->reset();
+  // Simulated time restarts at 0, stamps do not: the origin moves to the last stamp, so
+  // tf2 listeners see time go on (no jump back, no dropped buffers).
+  stamp_origin_ = last_stamp_;
+  anchor_time_ = target_time_ = 0.0;
+  ticks_since_anchor_ = 0;
+  trace_.clear();
+  if (reported_event_ != Event::kNone) {
+    std_msgs::String cleared;  // "": no event (the core's spelling of none)
+    event_publisher_.publish(cleared);
+  }
+  reported_event_ = Event::kNone;
+  rebaseline_energy();
+  response.success = true;
+  response.message = "reset to the initial state; simulated time 0 is stamped " +
+                     format("%.9f", (stamp_origin_).toSec()) + (paused_ ? " (still paused)" : "");
+  ROS_INFO("spinning_top: %s", response.message.c_str());
+  return true;
+}
+
+bool SpinningTopNode::on_pause(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& response) {
+  response.success = true;
+  response.message = paused_ ? "already paused" : format("paused at t = %.9g s", target_time_);
+  paused_ = true;
+  return true;
+}
+
+bool SpinningTopNode::on_resume(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& response) {
+  response.success = true;
+  response.message = paused_ ? format("resumed at t = %.9g s", target_time_) : "already running";
+  paused_ = false;
+  return true;
+}
+
+bool SpinningTopNode::on_step(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& response) {
+  if (!paused_) {
+    response.success = false;
+    response.message = "~step advances one tick while paused: call ~pause first";
+    return true;
+  }
+  tick();
+  response.success = true;
+  response.message = format("stepped to t = %.9g s", target_time_);
+  return true;
+}
+
+}  // namespace ros_front_end
+}  // namespace spinning_top
