@@ -251,7 +251,8 @@ SceneConfig read_scene(const Options& options) {
 
 /// The output instants: t_i = i / rate for i = 0..N, N = floor(duration * rate), each a
 /// single division (no accumulated round-off); plus t = duration when that is not one of
-/// them. A relative slack of 1e-9 absorbs decimal round-off, so 0.3 s at 10 Hz is 4 rows.
+/// them. A relative slack of 1e-9 absorbs decimal round-off: 1.1 s at 100 Hz is
+/// 110.00000000000001 intervals in doubles, and gives 111 rows, not a 112th a few ulps later.
 class OutputTimes {
  public:
   OutputTimes(double duration, double rate) : duration_(duration), rate_(rate) {

@@ -146,11 +146,14 @@ TEST_F(SimulateTest, RowsAtEveryOutputInstantFromZeroToTheEndInclusive) {
     std::vector<double> times;
   };
   // 0.25 s at 8 Hz is exactly 2 intervals; 0.3 s at 8 Hz is not a multiple (last row at 0.3);
-  // 0.3 * 10 is 3 only up to decimal round-off and must still give 4 rows, not 5.
+  // 1.1 * 100 is 110.00000000000001 in doubles, a multiple only up to decimal round-off: 111
+  // rows ending at 110 / 100 = 1.1, not a 112th row at "t = duration" a few ulps later.
+  std::vector<double> to_1_1;
+  for (int i = 0; i <= 110; ++i) to_1_1.push_back(i / 100.0);
   const std::vector<Case> cases = {
       {"0.25", "8", {0.0, 0.125, 0.25}},
       {"0.3", "8", {0.0, 0.125, 0.25, 0.3}},
-      {"0.3", "10", {0.0, 1.0 / 10, 2.0 / 10, 3.0 / 10}},
+      {"1.1", "100", to_1_1},
   };
   for (const Case& c : cases) {
     const Result r = simulate({"--config", kFixedTipYaml, "--duration", c.duration, "--output-rate", c.rate});
@@ -268,6 +271,32 @@ TEST_F(SimulateTest, TopWithoutSpinFallsAndTheLastRowSaysSo) {
   EXPECT_NEAR(last.values[kT], pendulum_fall_time(), 1e-9);
   // Energy is conserved through the fall (as in FixedTipSceneFileConservesEnergyOverTenSeconds).
   EXPECT_NEAR(last.values[kEnergy], rows.front().values[kEnergy], 1e-9 * rows.front().values[kEnergy]);
+}
+
+TEST_F(SimulateTest, FastNutationLiftsTheTipWhereTheNormalForceVanishes) {
+  // theta_dot0 = 20 rad/s: the centripetal term m h cos(theta) theta_dot^2 = 0.76 N is close to
+  // m g = 0.98 N, and the nutation drives R through zero within 0.05 s.
+  const Result r = simulate({"--config", kFixedTipYaml, "--set", "initial/nutation_rate=20", "--duration", "1"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::vector<Row> rows = parse_csv(r.out);
+  ASSERT_GE(rows.size(), 2u);
+  EXPECT_EQ(rows.back().event, "lift_off");
+  EXPECT_LT(rows.back().values[kT], 1.0);
+  // Located to ~1e-14 s with |dR/dt| of order m g times the nutation rate (~20 N/s): R = 0
+  // to far better than 1e-10 N (measured 4e-17 N); every earlier row has R > 0.
+  EXPECT_NEAR(rows.back().values[kNormal], 0.0, 1e-10);
+  for (std::size_t i = 0; i + 1 < rows.size(); ++i) EXPECT_GT(rows[i].values[kNormal], 0.0);
+
+  // theta_dot0 = 100 rad/s: m h cos(theta) theta_dot^2 = 19 N >> m g, so R < 0 already at t = 0:
+  // the run is one row, the initial state, with the event.
+  const Result at_start =
+      simulate({"--config", kFixedTipYaml, "--set", "initial/nutation_rate=100", "--duration", "1"});
+  ASSERT_EQ(at_start.exit_code, 0) << at_start.err;
+  const std::vector<Row> one = parse_csv(at_start.out);
+  ASSERT_EQ(one.size(), 1u);
+  EXPECT_EQ(one[0].values[kT], 0.0);
+  EXPECT_LT(one[0].values[kNormal], 0.0);
+  EXPECT_EQ(one[0].event, "lift_off");
 }
 
 TEST_F(SimulateTest, BadInputExitsWithCode2NamesTheCulpritAndWritesNothing) {
