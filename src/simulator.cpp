@@ -3,11 +3,15 @@
 #include "spinning_top/simulator.hpp"
 
 #include <cmath>
+#include <cstdio>
 #include <limits>
+#include <type_traits>
 
 #include "spinning_top/drivers.hpp"
 #include "spinning_top/integrators/dormand_prince.hpp"
 #include "spinning_top/integrators/rk4.hpp"
+#include "spinning_top/integrators/rosenbrock.hpp"
+#include "spinning_top/integrators/splitting.hpp"
 #include "spinning_top/scenes/fixed_tip.hpp"
 #include "spinning_top/scenes/frictionless.hpp"
 #include "spinning_top/scenes/viscous.hpp"
@@ -35,11 +39,33 @@ const char* to_string(SceneType scene) {
 
 const char* to_string(IntegratorType integrator) {
   switch (integrator) {
+    case IntegratorType::kAuto: return "auto";
     case IntegratorType::kRk4: return "rk4";
     case IntegratorType::kDopri5: return "dopri5";
+    case IntegratorType::kSplitting4: return BlanesMoan4::kName;
+    case IntegratorType::kSplitting6: return KahanLi6::kName;
+    case IntegratorType::kSplitting8: return KahanLi8::kName;
+    case IntegratorType::kRodas4: return "rodas4";
   }
   return "";
 }
+
+namespace {
+constexpr IntegratorType kAllIntegrators[] = {
+    IntegratorType::kAuto,       IntegratorType::kRk4,        IntegratorType::kDopri5, IntegratorType::kSplitting4,
+    IntegratorType::kSplitting6, IntegratorType::kSplitting8, IntegratorType::kRodas4};
+
+bool is_splitting(IntegratorType type) {
+  return type == IntegratorType::kSplitting4 || type == IntegratorType::kSplitting6 ||
+         type == IntegratorType::kSplitting8;
+}
+
+std::string format_seconds(double value) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, "%.3g", value);
+  return buffer;
+}
+}  // namespace
 
 SceneType parse_scene(const std::string& name) {
   for (SceneType s : {SceneType::kFixedTip, SceneType::kFrictionless, SceneType::kViscous})
@@ -48,9 +74,12 @@ SceneType parse_scene(const std::string& name) {
 }
 
 IntegratorType parse_integrator(const std::string& name) {
-  for (IntegratorType i : {IntegratorType::kRk4, IntegratorType::kDopri5})
+  std::string names;
+  for (IntegratorType i : kAllIntegrators) {
     if (name == to_string(i)) return i;
-  throw InvalidParameter("integrator", "'" + name + "' is not one of rk4, dopri5");
+    names += (names.empty() ? "" : ", ") + std::string(to_string(i));
+  }
+  throw InvalidParameter("integrator", "'" + name + "' is not one of " + names);
 }
 
 void validate(const IntegratorSettings& settings) {
@@ -60,6 +89,73 @@ void validate(const IntegratorSettings& settings) {
   if (!std::isfinite(settings.tolerance) || !(settings.tolerance >= 1e-14) || !(settings.tolerance < 1.0))
     throw InvalidParameter("tolerance", "must lie in [1e-14, 1)");
 }
+
+double MotionRates::fastest_oscillation() const { return std::max({nutation, pendulum, attitude}); }
+
+MotionRates motion_rates(const SceneConfig& config) {
+  const TopParameters& p = config.top;
+  // The sliding top's transverse inertia about G lies between A and A + m h^2 sin^2(theta):
+  // A gives the upper bound of its nutation rate.
+  const double transverse = config.scene == SceneType::kFixedTip ? p.inertia_about_tip() : p.inertia_transverse;
+  MotionRates rates;
+  rates.nutation = p.inertia_axial * std::abs(config.initial.spin) / transverse;
+  rates.pendulum = std::sqrt(p.mass * p.gravity * p.tip_distance / transverse);
+  rates.attitude = 0.5 * initial_body_rates(config.initial).norm();
+  if (config.scene == SceneType::kViscous)
+    rates.friction = p.friction * (1.0 / p.mass + p.tip_distance * p.tip_distance / p.inertia_transverse);
+  return rates;
+}
+
+double largest_fixed_step(const SceneConfig& config, IntegratorType type) {
+  if (type == IntegratorType::kAuto || type == IntegratorType::kDopri5) return std::numeric_limits<double>::infinity();
+  const MotionRates rates = motion_rates(config);
+  double fastest = rates.fastest_oscillation();
+  if (type == IntegratorType::kRk4) fastest = std::max(fastest, rates.friction);
+  return fastest > 0.0 ? 2.0 / fastest : std::numeric_limits<double>::infinity();
+}
+
+IntegratorType auto_integrator(const SceneConfig& config) {
+  switch (config.scene) {
+    case SceneType::kFixedTip: return IntegratorType::kSplitting6;
+    case SceneType::kFrictionless: return IntegratorType::kDopri5;
+    case SceneType::kViscous:
+      return motion_rates(config).friction * config.integrator.step > 1.0 ? IntegratorType::kRodas4
+                                                                          : IntegratorType::kDopri5;
+  }
+  return IntegratorType::kDopri5;
+}
+
+namespace {
+
+/// Refuses a fixed step that the method cannot resolve, naming the limit and its cause.
+void validate_step_against_motion(const SceneConfig& config) {
+  const IntegratorType type = config.integrator.type;
+  if (is_splitting(type) && config.scene != SceneType::kFixedTip)
+    throw InvalidParameter("integrator", std::string(to_string(type)) +
+                                             " integrates the fixed tip only (its free rotation is exact only "
+                                             "about a fixed pivot); use auto, dopri5, rk4 or rodas4");
+  const double limit = largest_fixed_step(config, type);
+  if (config.integrator.step <= limit) return;
+  const MotionRates rates = motion_rates(config);
+  std::string cause;
+  if (type == IntegratorType::kRk4 && rates.friction >= rates.fastest_oscillation()) {
+    cause = "the friction relaxation rate k (1/m + h^2/A) = " + format_seconds(rates.friction) +
+            " 1/s (rk4 is unstable beyond 2.78/rate; use rodas4 or auto for stiff friction)";
+  } else if (rates.nutation >= std::max(rates.pendulum, rates.attitude)) {
+    cause = "the nutation, C |omega_Z| / A = " + format_seconds(rates.nutation) + " rad/s (period " +
+            format_seconds(2.0 * M_PI / rates.nutation) + " s)";
+  } else if (rates.pendulum >= rates.attitude) {
+    cause = "the pendulum motion, sqrt(m g h / A) = " + format_seconds(rates.pendulum) + " rad/s";
+  } else {
+    cause = "the rotation, |omega| / 2 = " + format_seconds(rates.attitude) + " rad/s";
+  }
+  throw InvalidParameter("step", format_seconds(config.integrator.step) + " s exceeds the largest step " +
+                                     format_seconds(limit) + " s that " + to_string(type) +
+                                     " can resolve (2 / rate of the fastest motion: " + cause +
+                                     "); use a smaller step or integrator: auto");
+}
+
+}  // namespace
 
 void validate(const SceneConfig& config) {
   validate(config.top);
@@ -74,16 +170,24 @@ void validate(const SceneConfig& config) {
                              "G's horizontal velocity applies to the viscous scene only (without friction "
                              "G moves only vertically)");
   }
+  validate_step_against_motion(config);
 }
 
 namespace {
 
+/// The substep a fixed-step driver runs at: the configured step, or, for auto, at most half
+/// the largest step of the method auto picked (auto is never refused: it shortens the substep).
+double fixed_substep(const SceneConfig& config) {
+  if (config.integrator.type != IntegratorType::kAuto) return config.integrator.step;
+  return std::min(config.integrator.step, 0.5 * largest_fixed_step(config, auto_integrator(config)));
+}
+
 template <class Driver>
-Driver make_driver(const IntegratorSettings& settings) {
+Driver make_driver(const SceneConfig& config) {
   if constexpr (Driver::kAdaptive) {
-    return Driver(settings.tolerance);
+    return Driver(config.integrator.tolerance);
   } else {
-    return Driver(settings.step);
+    return Driver(fixed_substep(config));
   }
 }
 
@@ -92,6 +196,7 @@ class SceneSimulator final : public Simulator {
  public:
   SceneSimulator(const SceneConfig& config, Driver driver)
       : config_(config), model_(config.top, config.initial), driver_(std::move(driver)) {
+    prefix_ = config.integrator.type == IntegratorType::kAuto ? "auto: " : "";
     driver_.reset(model_, 0.0, model_.initial_state());
   }
 
@@ -122,7 +227,7 @@ class SceneSimulator final : public Simulator {
       throw InvalidParameter("mass", "the top's mass, inertia and tip distance cannot change during a run");
     if (integrator.type != config_.integrator.type)
       throw InvalidParameter("integrator", "cannot change during a run");
-    Driver driver = make_driver<Driver>(integrator);
+    Driver driver = make_driver<Driver>(next);
     const double t = driver_.time();
     const typename Model::State y = driver_.state();
     const Event event = driver_.event();
@@ -134,26 +239,41 @@ class SceneSimulator final : public Simulator {
   }
 
   const SceneConfig& config() const override { return config_; }
-  std::string integrator_description() const override { return driver_.description(); }
+  std::string integrator_description() const override { return prefix_ + driver_.description(); }
   long steps() const override { return driver_.steps(); }
 
  private:
   SceneConfig config_;
   Model model_;
   Driver driver_;
+  std::string prefix_;
 };
+
+template <class Model, class Driver>
+std::unique_ptr<Simulator> make_scene(const SceneConfig& config) {
+  return std::make_unique<SceneSimulator<Model, Driver>>(config, make_driver<Driver>(config));
+}
 
 template <class Model>
 std::unique_ptr<Simulator> make_for_model(const SceneConfig& config) {
-  switch (config.integrator.type) {
-    case IntegratorType::kRk4: {
-      using Driver = FixedStepDriver<Model, ClassicalRk4<Model>>;
-      return std::make_unique<SceneSimulator<Model, Driver>>(config, make_driver<Driver>(config.integrator));
-    }
-    case IntegratorType::kDopri5: {
-      using Driver = AdaptiveDriver<Model, DormandPrince54<Model>>;
-      return std::make_unique<SceneSimulator<Model, Driver>>(config, make_driver<Driver>(config.integrator));
-    }
+  const IntegratorType type =
+      config.integrator.type == IntegratorType::kAuto ? auto_integrator(config) : config.integrator.type;
+  switch (type) {
+    case IntegratorType::kAuto: break;
+    case IntegratorType::kRk4: return make_scene<Model, FixedStepDriver<Model, ClassicalRk4<Model>>>(config);
+    case IntegratorType::kDopri5: return make_scene<Model, AdaptiveDriver<Model, DormandPrince54<Model>>>(config);
+    case IntegratorType::kRodas4: return make_scene<Model, FixedStepDriver<Model, Rodas4<Model>>>(config);
+    case IntegratorType::kSplitting4:
+    case IntegratorType::kSplitting6:
+    case IntegratorType::kSplitting8:
+      if constexpr (std::is_same_v<Model, FixedTip>) {
+        if (type == IntegratorType::kSplitting4)
+          return make_scene<Model, FixedStepDriver<Model, Splitting<Model, BlanesMoan4>>>(config);
+        if (type == IntegratorType::kSplitting6)
+          return make_scene<Model, FixedStepDriver<Model, Splitting<Model, KahanLi6>>>(config);
+        return make_scene<Model, FixedStepDriver<Model, Splitting<Model, KahanLi8>>>(config);
+      }
+      break;  // refused by validate() for the other scenes
   }
   throw InvalidParameter("integrator", "unknown integrator");
 }

@@ -13,17 +13,23 @@
 namespace spinning_top {
 
 enum class SceneType { kFixedTip, kFrictionless, kViscous };
-enum class IntegratorType { kRk4, kDopri5 };
+/// kAuto picks per scene and parameters (see auto_integrator()); the others force a method:
+/// rk4 (classical, fixed step), dopri5 (adaptive 5(4), dense output), splitting4/6/8 (fixed
+/// tip only: exact free rotation + gravity kick, composed to order 4/6/8; conserves omega_Z
+/// and L_z exactly, bounded energy error), rodas4 (L-stable Rosenbrock, fixed step, for stiff
+/// friction). doc/integrators.md explains the choice.
+enum class IntegratorType { kAuto, kRk4, kDopri5, kSplitting4, kSplitting6, kSplitting8, kRodas4 };
 
 const char* to_string(SceneType scene);
 const char* to_string(IntegratorType integrator);
 /// Parses "fixed_tip" | "frictionless" | "viscous"; throws InvalidParameter("scene", ...).
 SceneType parse_scene(const std::string& name);
-/// Parses "rk4" | "dopri5"; throws InvalidParameter("integrator", ...).
+/// Parses "auto" | "rk4" | "dopri5" | "splitting4" | "splitting6" | "splitting8" | "rodas4";
+/// throws InvalidParameter("integrator", ...).
 IntegratorType parse_integrator(const std::string& name);
 
 struct IntegratorSettings {
-  IntegratorType type = IntegratorType::kDopri5;
+  IntegratorType type = IntegratorType::kAuto;
   double step = 1e-3;        ///< fixed-step methods: largest substep [s]
   double tolerance = 1e-10;  ///< adaptive methods: relative and absolute local error tolerance
 };
@@ -42,6 +48,30 @@ struct SceneConfig {
 /// Validates everything, including what only makes sense in some scenes (initial horizontal
 /// velocity only in the viscous scene, friction only there). Throws InvalidParameter.
 void validate(const SceneConfig& config);
+
+/// Rates [1/s] of the fastest motions of a configuration, which a fixed step must resolve.
+struct MotionRates {
+  double nutation = 0.0;   ///< C |omega_Z| / A' (A' = A0 for the fixed tip, A when sliding)
+  double pendulum = 0.0;   ///< sqrt(m g h / A')
+  double attitude = 0.0;   ///< |omega(0)| / 2: the rate of the quaternion ODE q' = q (0, omega) / 2
+  double friction = 0.0;   ///< lambda = k (1/m + h^2/A): relaxation rate of v_P (viscous)
+  /// The fastest of nutation, pendulum and attitude (what every fixed-step method must resolve).
+  double fastest_oscillation() const;
+};
+MotionRates motion_rates(const SceneConfig& config);
+
+/// The largest fixed step [s] that `type` can take on this configuration: 2 / (fastest rate),
+/// i.e. at least pi steps per period of the fastest oscillation, and, for the explicit rk4 in
+/// the viscous scene, 2 / lambda (inside its stability interval, |R(-2)| < 1). Infinity for
+/// the adaptive dopri5 and for auto (which shortens its substep instead). validate() refuses
+/// a larger step with InvalidParameter("step", ...) naming this limit.
+double largest_fixed_step(const SceneConfig& config, IntegratorType type);
+
+/// What `integrator: auto` runs for this configuration (doc/integrators.md, "auto"):
+///   fixed_tip -> splitting6 (geometric), frictionless -> dopri5, viscous -> rodas4 when the
+///   friction time 1/lambda = m / (k (1 + m h^2 / A)) is shorter than the step, else dopri5.
+/// Fixed-step choices run at min(step, largest_fixed_step / 2).
+IntegratorType auto_integrator(const SceneConfig& config);
 
 /// What a front end shows of the simulation at one instant.
 struct Snapshot {
@@ -70,7 +100,8 @@ class Simulator {
   /// change this way. Throws InvalidParameter (and changes nothing) if the update is invalid.
   virtual void update(const TopParameters& top, const IntegratorSettings& integrator) = 0;
   virtual const SceneConfig& config() const = 0;
-  /// e.g. "dopri5, tolerance 1e-10" or "rk4, step 0.001 s".
+  /// e.g. "dopri5, tolerance 1e-10", "rk4, step 0.001 s" or, for auto,
+  /// "auto: splitting6, step 0.001 s".
   virtual std::string integrator_description() const = 0;
   /// Accepted integration steps since the last reset (a cost measure).
   virtual long steps() const = 0;
