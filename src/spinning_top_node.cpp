@@ -5,8 +5,11 @@
 
 int main(int argc, char** argv) {
   ros::init(argc, argv, "spinning_top");
+  // Held outside the try: destroying the last NodeHandle shuts ROS (and its logging) down,
+  // and the fatal message below must still be printed.
+  ros::NodeHandle nh, private_nh("~");
   try {
-    spinning_top::ros_front_end::SpinningTopNode node(ros::NodeHandle(), ros::NodeHandle("~"));
+    spinning_top::ros_front_end::SpinningTopNode node(nh, private_nh);
     ros::spin();
   } catch (const spinning_top::InvalidParameter& error) {
     ROS_FATAL("spinning_top: invalid parameter ~%s (%s)", error.parameter().c_str(), error.what());
