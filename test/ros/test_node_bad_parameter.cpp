@@ -1,0 +1,87 @@
+// rostest (test/node_bad_parameter.test): the node binary started with one bad private
+// parameter must exit non-zero, name the parameter in its ROS_FATAL message, and publish
+// nothing. A valid start is the control: it must still be running when we stop it.
+#include <geometry_msgs/PointStamped.h>
+#include <gtest/gtest.h>
+#include <ros/ros.h>
+#include <sys/wait.h>
+
+#include <cstdio>
+#include <string>
+
+#include "node_test_helpers.hpp"
+
+using node_test::Recorder;
+
+namespace {
+
+struct Outcome {
+  int exit_code;
+  std::string output;
+};
+
+/// Runs the node as `name` with the given private-parameter arguments, for at most
+/// `seconds` (then `timeout` ends it with exit code 124).
+Outcome run_node(const std::string& name, const std::string& arguments, int seconds = 20) {
+  const std::string command = "timeout " + std::to_string(seconds) + " " SPINNING_TOP_NODE_EXECUTABLE " __name:=" +
+                              name + " " + arguments + " 2>&1";
+  FILE* pipe = popen(command.c_str(), "r");
+  EXPECT_NE(pipe, nullptr);
+  Outcome outcome{-1, ""};
+  if (pipe == nullptr) return outcome;
+  char buffer[4096];
+  while (fgets(buffer, sizeof buffer, pipe) != nullptr) outcome.output += buffer;
+  const int status = pclose(pipe);
+  outcome.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return outcome;
+}
+
+void expect_refused(const std::string& name, const std::string& arguments, const std::string& parameter) {
+  ros::NodeHandle nh;
+  Recorder<geometry_msgs::PointStamped> points(nh, "/" + name + "/contact_point");
+  const Outcome outcome = run_node(name, arguments);
+  EXPECT_NE(outcome.exit_code, 0) << arguments;
+  EXPECT_NE(outcome.exit_code, 124) << arguments << ": still running after 20 s";
+  EXPECT_NE(outcome.output.find("FATAL"), std::string::npos) << outcome.output;
+  EXPECT_NE(outcome.output.find("invalid parameter ~" + parameter + " "), std::string::npos)
+      << "expected ~" << parameter << " named in:\n" << outcome.output;
+  ros::WallDuration(0.2).sleep();
+  EXPECT_EQ(points.size(), 0u) << arguments << ": published before exiting";
+}
+
+}  // namespace
+
+TEST(NodeBadParameter, NegativeMass) { expect_refused("bad_mass", "_mass:=-1.0", "mass"); }
+TEST(NodeBadParameter, MassThatIsNotANumber) { expect_refused("bad_mass_text", "_mass:=heavy", "mass"); }
+TEST(NodeBadParameter, AxialInertiaAboveTwiceTransverse) {
+  expect_refused("bad_inertia", "_inertia_axial:=1e-4 _inertia_transverse:=4e-5", "inertia_axial");
+}
+TEST(NodeBadParameter, FrictionInTheFixedTipScene) { expect_refused("bad_friction", "_friction:=0.1", "friction"); }
+TEST(NodeBadParameter, TiltWithTheAxisBelowTheFloor) { expect_refused("bad_tilt", "_initial/tilt:=2.0", "initial/tilt"); }
+TEST(NodeBadParameter, TiltOfTheWrongType) { expect_refused("bad_tilt_type", "_initial/tilt:=true", "initial/tilt"); }
+TEST(NodeBadParameter, UnknownScene) { expect_refused("bad_scene", "_scene:=ice", "scene"); }
+TEST(NodeBadParameter, UnknownIntegrator) { expect_refused("bad_integrator", "_integrator:=no_such_integrator", "integrator"); }
+TEST(NodeBadParameter, ZeroRate) { expect_refused("bad_rate", "_rate:=0", "rate"); }
+TEST(NodeBadParameter, NegativeRealTimeFactor) {
+  expect_refused("bad_rtf", "_real_time_factor:=-1", "real_time_factor");
+}
+TEST(NodeBadParameter, FrameWithLeadingSlash) { expect_refused("bad_frame", "_world_frame:=/world", "world_frame"); }
+
+// The control: the same binary with valid parameters runs (and publishes) until stopped.
+TEST(NodeBadParameter, ValidParametersKeepTheNodeRunning) {
+  ros::NodeHandle nh;
+  Recorder<geometry_msgs::PointStamped> points(nh, "/good/contact_point");
+  const Outcome outcome = run_node("good", "_rate:=100 _publish_clock:=false _body_frame:=good_top "
+                                   "_contact_frame:=good_contact", 3);
+  EXPECT_EQ(outcome.exit_code, 124) << outcome.output;
+  EXPECT_GT(points.size(), 0u);
+}
+
+int main(int argc, char** argv) {
+  testing::InitGoogleTest(&argc, argv);
+  ros::init(argc, argv, "test_node_bad_parameter");
+  ros::NodeHandle nh;
+  ros::AsyncSpinner spinner(1);
+  spinner.start();
+  return RUN_ALL_TESTS();
+}
