@@ -9,6 +9,7 @@
 
 #include "spinning_top/drivers.hpp"
 #include "spinning_top/integrators/dormand_prince.hpp"
+#include "spinning_top/integrators/radau.hpp"
 #include "spinning_top/integrators/rk4.hpp"
 #include "spinning_top/integrators/rosenbrock.hpp"
 #include "spinning_top/integrators/splitting.hpp"
@@ -45,6 +46,7 @@ const char* to_string(IntegratorType integrator) {
     case IntegratorType::kSplitting4: return BlanesMoan4::kName;
     case IntegratorType::kSplitting6: return KahanLi6::kName;
     case IntegratorType::kSplitting8: return KahanLi8::kName;
+    case IntegratorType::kRadau5: return "radau5";
     case IntegratorType::kRodas4: return "rodas4";
   }
   return "";
@@ -53,7 +55,7 @@ const char* to_string(IntegratorType integrator) {
 namespace {
 constexpr IntegratorType kAllIntegrators[] = {
     IntegratorType::kAuto,       IntegratorType::kRk4,        IntegratorType::kDopri5, IntegratorType::kSplitting4,
-    IntegratorType::kSplitting6, IntegratorType::kSplitting8, IntegratorType::kRodas4};
+    IntegratorType::kSplitting6, IntegratorType::kSplitting8, IntegratorType::kRadau5,     IntegratorType::kRodas4};
 
 bool is_splitting(IntegratorType type) {
   return type == IntegratorType::kSplitting4 || type == IntegratorType::kSplitting6 ||
@@ -119,7 +121,7 @@ IntegratorType auto_integrator(const SceneConfig& config) {
     case SceneType::kFixedTip: return IntegratorType::kSplitting6;
     case SceneType::kFrictionless: return IntegratorType::kDopri5;
     case SceneType::kViscous:
-      return motion_rates(config).friction * config.integrator.step > 1.0 ? IntegratorType::kRodas4
+      return motion_rates(config).friction * config.integrator.step > 1.0 ? IntegratorType::kRadau5
                                                                           : IntegratorType::kDopri5;
   }
   return IntegratorType::kDopri5;
@@ -262,6 +264,7 @@ std::unique_ptr<Simulator> make_for_model(const SceneConfig& config) {
     case IntegratorType::kAuto: break;
     case IntegratorType::kRk4: return make_scene<Model, FixedStepDriver<Model, ClassicalRk4<Model>>>(config);
     case IntegratorType::kDopri5: return make_scene<Model, AdaptiveDriver<Model, DormandPrince54<Model>>>(config);
+    case IntegratorType::kRadau5: return make_scene<Model, FixedStepDriver<Model, RadauIIA5<Model>>>(config);
     case IntegratorType::kRodas4: return make_scene<Model, FixedStepDriver<Model, Rodas4<Model>>>(config);
     case IntegratorType::kSplitting4:
     case IntegratorType::kSplitting6:

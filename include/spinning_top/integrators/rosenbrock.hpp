@@ -12,9 +12,8 @@
 
 #include <Eigen/Core>
 #include <Eigen/LU>
-#include <algorithm>
-#include <cmath>
-#include <limits>
+
+#include "spinning_top/integrators/jacobian.hpp"
 
 namespace spinning_top {
 
@@ -29,7 +28,7 @@ class Rodas4 {
   static constexpr const char* kName = "rodas4";
 
   void step(const Model& model, State& y, double dt) {
-    jacobian(model, y, jacobian_);
+    finite_difference_jacobian(model, y, jacobian_);
     const Matrix iteration_matrix = Matrix::Identity() * (1.0 / (kGamma * dt)) - jacobian_;
     const Eigen::PartialPivLU<Matrix> lu(iteration_matrix);
     State k[kStages];
@@ -50,26 +49,6 @@ class Rodas4 {
   }
 
  private:
-  /// df/dy by central differences: error O(delta^2) + O(eps/delta), about 1e-11 of |J| at
-  /// delta = eps^(1/3) |y_j|. A Rosenbrock method needs the exact Jacobian for its order; this
-  /// one is exact enough that the order holds down to errors of ~1e-12 (measured, see
-  /// test_integrators), and any J keeps the linear stability of the friction modes, whose
-  /// rates it resolves to the same relative accuracy.
-  static void jacobian(const Model& model, const State& y, Matrix& j) {
-    const double cube_root_eps = std::cbrt(std::numeric_limits<double>::epsilon());
-    State plus, minus, f_plus, f_minus;
-    for (int c = 0; c < kN; ++c) {
-      const double delta = cube_root_eps * std::max(1.0, std::abs(y[c]));
-      plus = y;
-      minus = y;
-      plus[c] += delta;
-      minus[c] -= delta;
-      model.derivative(plus, f_plus);
-      model.derivative(minus, f_minus);
-      j.col(c) = (f_plus - f_minus) / ((plus[c] - minus[c]));
-    }
-  }
-
   Matrix jacobian_;
 
   static constexpr double kGamma = 0.25;
