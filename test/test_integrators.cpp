@@ -166,6 +166,17 @@ TEST(SplittingInvariants, SpinAndVerticalAngularMomentumExactEnergyBounded) {
   EXPECT_LT(max_energy_error_long, 2.0 * max_energy_error_short);
 }
 
+TEST(FixedStepDriver, OneSubstepPerRequestOfExactlyTheStep) {
+  // The node asks for t = i / rate; i * 1e-3 - (i - 1) * 1e-3 differs from 1e-3 by rounding,
+  // which must not cost a second substep.
+  SceneConfig config;
+  config.initial = nutating_top();
+  config.integrator.type = IntegratorType::kRk4;
+  auto simulator = make_simulator(config);
+  for (int i = 1; i <= 20000; ++i) ASSERT_EQ(simulator->advance_to(i * 1e-3), Event::kNone);
+  EXPECT_EQ(simulator->steps(), 20000);
+}
+
 TEST(AutoRule, GeometricForTheFixedTip) {
   SceneConfig config;
   config.initial = nutating_top();
