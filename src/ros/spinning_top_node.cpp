@@ -60,16 +60,24 @@ std_msgs::ColorRGBA color(float r, float g, float b, float a = 1.0f) {
   return c;
 }
 
-/// The uniform solid cylinder with the top's m, A and C: C = m r^2 / 2 and
-/// A = m (3 r^2 + L^2) / 12 about G give r = sqrt(2C/m), L = sqrt(6 (2A - C) / m);
-/// C <= 2A (validated by the core) keeps L real.
-struct EquivalentCylinder {
-  double radius, length;
+/// The body drawn by rviz: a solid cone with its apex at the tip and its centroid at G
+/// (height H = 4h/3, since a cone's centroid lies 3/4 of the way from the apex), whose
+/// inertia ratio C/A about G is the top's: for a cone C = 3/10 m R^2 and
+/// A = 3/20 m R^2 + 3/80 m H^2, so C/A = rho gives R^2 = rho H^2 / (4 (2 - rho)).
+/// A real top is denser at the rim, so this is the shape, not the mass distribution.
+/// rho -> 2 (a flat disc) or h = 0 has no such cone: the radius is then capped at 2H, and
+/// for h = 0 it is the radius of the uniform cylinder with the same m and C, sqrt(2C/m).
+struct BodyShape {
+  double height, radius;
 };
 
-EquivalentCylinder equivalent_cylinder(const TopParameters& top) {
-  return {std::sqrt(2.0 * top.inertia_axial / top.mass),
-          std::sqrt(std::max(0.0, 6.0 * (2.0 * top.inertia_transverse - top.inertia_axial) / top.mass))};
+BodyShape body_shape(const TopParameters& top) {
+  const double height = 4.0 * top.tip_distance / 3.0;
+  const double rho = top.inertia_axial / top.inertia_transverse;
+  double radius = rho < 2.0 ? 0.5 * height * std::sqrt(rho / (2.0 - rho)) : 2.0 * height;
+  radius = std::min(radius, 2.0 * height);
+  if (!(radius > 0.0)) radius = std::sqrt(2.0 * top.inertia_axial / top.mass);
+  return {std::max(height, 1e-3), radius};
 }
 
 }  // namespace
@@ -284,32 +292,50 @@ void SpinningTopNode::publish(const Snapshot& s, const ros::Time& stamp) {
 void SpinningTopNode::publish_markers(const Snapshot& s, const ros::Time& stamp) {
   const ModelOutputs& out = s.outputs;
   const TopParameters& top = simulator_->config().top;
-  const EquivalentCylinder cylinder = equivalent_cylinder(top);
+  const BodyShape shape = body_shape(top);
   visualization_msgs::MarkerArray array;
 
-  visualization_msgs::Marker marker;
-  marker.header.stamp = stamp;
-  marker.header.frame_id = settings_.body_frame;
-  marker.frame_locked = true;  // rviz keeps it on the body frame between our messages
-  marker.action = visualization_msgs::Marker::ADD;
-  marker.pose.orientation.w = 1.0;
-
-  // The body: the cylinder with the top's inertia, centred at G ...
-  marker.ns = "body";
-  marker.id = 0;
-  marker.type = visualization_msgs::Marker::CYLINDER;
-  marker.scale.x = marker.scale.y = 2.0 * cylinder.radius;
-  marker.scale.z = std::max(cylinder.length, 1e-4);
-  marker.color = color(0.85f, 0.33f, 0.1f);
-  array.markers.push_back(marker);
-  // ... and a spindle from the tip (z = -h) up through it.
-  const double spindle_top = 0.5 * cylinder.length + 0.3 * (top.tip_distance + 0.5 * cylinder.length);
-  marker.id = 1;
-  marker.scale.x = marker.scale.y = std::max(0.15 * cylinder.radius, 1e-4);
-  marker.scale.z = std::max(spindle_top + top.tip_distance, 1e-4);
-  marker.pose.position.z = 0.5 * (spindle_top - top.tip_distance);
-  marker.color = color(0.3f, 0.3f, 0.35f);
-  array.markers.push_back(marker);
+  // The body: the cone from the tip (z = -h in the body frame) to its base, in coloured
+  // sectors so that the spin is visible; frame-locked, so rviz moves it with the tf.
+  visualization_msgs::Marker body;
+  body.header.stamp = stamp;
+  body.header.frame_id = settings_.body_frame;
+  body.frame_locked = true;
+  body.ns = "body";
+  body.id = 0;
+  body.type = visualization_msgs::Marker::TRIANGLE_LIST;
+  body.action = visualization_msgs::Marker::ADD;
+  body.pose.orientation.w = 1.0;
+  body.scale.x = body.scale.y = body.scale.z = 1.0;
+  body.color = color(1.0f, 1.0f, 1.0f);
+  const int sectors = 48;
+  const double base_z = shape.height - top.tip_distance;
+  const Vector3 apex(0.0, 0.0, -top.tip_distance), centre(0.0, 0.0, base_z);
+  auto rim = [&](int i) {
+    const double angle = 2.0 * M_PI * i / sectors;
+    return Vector3(shape.radius * std::cos(angle), shape.radius * std::sin(angle), base_z);
+  };
+  for (int i = 0; i < sectors; ++i) {
+    const std_msgs::ColorRGBA c = (i / 4) % 2 == 0 ? color(0.9f, 0.35f, 0.1f, 0.7f) : color(0.95f, 0.85f, 0.6f, 0.7f);
+    // Both windings of every triangle: rviz culls back faces.
+    for (const Vector3& v : {apex, rim(i), rim(i + 1), apex, rim(i + 1), rim(i), centre, rim(i + 1), rim(i),
+                             centre, rim(i), rim(i + 1)}) {
+      body.points.push_back(to_point(v));
+      body.colors.push_back(c);
+    }
+  }
+  array.markers.push_back(body);
+  // A short handle on top, as on a toy top.
+  visualization_msgs::Marker handle = body;
+  handle.id = 1;
+  handle.type = visualization_msgs::Marker::CYLINDER;
+  handle.points.clear();
+  handle.colors.clear();
+  handle.scale.x = handle.scale.y = 0.15 * shape.radius;
+  handle.scale.z = 0.4 * shape.height;
+  handle.pose.position.z = base_z + 0.5 * handle.scale.z;
+  handle.color = color(0.3f, 0.3f, 0.35f);
+  array.markers.push_back(handle);
 
   // The tip's trace on the floor (world frame, bounded).
   visualization_msgs::Marker trace;
