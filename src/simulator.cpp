@@ -9,6 +9,7 @@
 
 #include "spinning_top/drivers.hpp"
 #include "spinning_top/integrators/dormand_prince.hpp"
+#include "spinning_top/integrators/gauss.hpp"
 #include "spinning_top/integrators/radau.hpp"
 #include "spinning_top/integrators/rk4.hpp"
 #include "spinning_top/integrators/rosenbrock.hpp"
@@ -46,6 +47,7 @@ const char* to_string(IntegratorType integrator) {
     case IntegratorType::kSplitting4: return BlanesMoan4::kName;
     case IntegratorType::kSplitting6: return KahanLi6::kName;
     case IntegratorType::kSplitting8: return KahanLi8::kName;
+    case IntegratorType::kGauss6: return "gauss6";
     case IntegratorType::kRadau5: return "radau5";
     case IntegratorType::kRodas4: return "rodas4";
   }
@@ -55,7 +57,8 @@ const char* to_string(IntegratorType integrator) {
 namespace {
 constexpr IntegratorType kAllIntegrators[] = {
     IntegratorType::kAuto,       IntegratorType::kRk4,        IntegratorType::kDopri5, IntegratorType::kSplitting4,
-    IntegratorType::kSplitting6, IntegratorType::kSplitting8, IntegratorType::kRadau5,     IntegratorType::kRodas4};
+    IntegratorType::kSplitting6, IntegratorType::kSplitting8, IntegratorType::kGauss6,      IntegratorType::kRadau5,
+    IntegratorType::kRodas4};
 
 bool is_splitting(IntegratorType type) {
   return type == IntegratorType::kSplitting4 || type == IntegratorType::kSplitting6 ||
@@ -119,7 +122,7 @@ double largest_fixed_step(const SceneConfig& config, IntegratorType type) {
 IntegratorType auto_integrator(const SceneConfig& config) {
   switch (config.scene) {
     case SceneType::kFixedTip: return IntegratorType::kSplitting6;
-    case SceneType::kFrictionless: return IntegratorType::kDopri5;
+    case SceneType::kFrictionless: return IntegratorType::kGauss6;
     case SceneType::kViscous:
       return motion_rates(config).friction * config.integrator.step > 1.0 ? IntegratorType::kRadau5
                                                                           : IntegratorType::kDopri5;
@@ -135,7 +138,11 @@ void validate_step_against_motion(const SceneConfig& config) {
   if (is_splitting(type) && config.scene != SceneType::kFixedTip)
     throw InvalidParameter("integrator", std::string(to_string(type)) +
                                              " integrates the fixed tip only (its free rotation is exact only "
-                                             "about a fixed pivot); use auto, dopri5, rk4 or rodas4");
+                                             "about a fixed pivot); use auto, gauss6, dopri5, rk4 or radau5");
+  if (type == IntegratorType::kGauss6 && config.scene == SceneType::kViscous)
+    throw InvalidParameter("integrator",
+                           "gauss6 integrates the fixed tip and the frictionless top (whose attitude dynamics "
+                           "close on the vertical and the body rates); use auto, radau5, dopri5 or rk4");
   const double limit = largest_fixed_step(config, type);
   if (config.integrator.step <= limit) return;
   const MotionRates rates = motion_rates(config);
@@ -264,6 +271,10 @@ std::unique_ptr<Simulator> make_for_model(const SceneConfig& config) {
     case IntegratorType::kAuto: break;
     case IntegratorType::kRk4: return make_scene<Model, FixedStepDriver<Model, ClassicalRk4<Model>>>(config);
     case IntegratorType::kDopri5: return make_scene<Model, AdaptiveDriver<Model, DormandPrince54<Model>>>(config);
+    case IntegratorType::kGauss6:
+      if constexpr (!std::is_same_v<Model, Viscous>)
+        return make_scene<Model, FixedStepDriver<Model, ReducedGauss6<Model>>>(config);
+      break;  // refused by validate()
     case IntegratorType::kRadau5: return make_scene<Model, FixedStepDriver<Model, RadauIIA5<Model>>>(config);
     case IntegratorType::kRodas4: return make_scene<Model, FixedStepDriver<Model, Rodas4<Model>>>(config);
     case IntegratorType::kSplitting4:
