@@ -231,7 +231,7 @@ TEST(ExtremeCases, FastPrecessionLiftsTheTipOffAtTheQuadratureTime) {
 
 /// Viscous with a tiny m/k: stable, E + W = E0, the tip pinned to -(m/k) v_G, and the fixed-tip
 /// motion recovered to O(m/k).
-void check_stiff_friction(const std::string& name, double duration) {
+void check_stiff_friction(const std::string& name, double duration, double* deviation_out = nullptr) {
   const SceneConfig c = load_scene(scene_file(name));
   const double epsilon = c.top.mass / c.top.friction;
   const CaseRun run = run_at_node_rate(c, duration);
@@ -274,6 +274,7 @@ void check_stiff_friction(const std::string& name, double duration) {
   // (rates up to C wZ / A0 = 112 rad/s) may amplify it over the run by up to ~10. 100 (m/k) rad
   // covers both, and fails for any method that is not converging to the fixed tip as m/k -> 0.
   EXPECT_LE(deviation, 1e2 * epsilon);
+  if (deviation_out != nullptr) *deviation_out = deviation;
 }
 
 TEST(ExtremeCases, StiffFrictionMicrosecondIsStableAndApproachesTheFixedTip) {
@@ -282,6 +283,19 @@ TEST(ExtremeCases, StiffFrictionMicrosecondIsStableAndApproachesTheFixedTip) {
 
 TEST(ExtremeCases, StiffFrictionTenNanosecondsIsStableAndApproachesTheFixedTip) {
   check_stiff_friction("stiff_friction_1e-8", 0.05);
+}
+
+TEST(ExtremeCases, StiffFrictionDeviationFromTheFixedTipIsFirstOrderInMOverK) {
+  // The fixed tip is the m/k -> 0 limit with an O(m/k) correction (a regular expansion on the
+  // slow manifold after the O(m/k)-long initial layer): dividing m/k by 100 must divide the
+  // axis's deviation by ~100. [50, 200] accepts an observed order p = log(ratio) / log(100)
+  // within 0.85..1.15, and rejects order 0 (a method that does not converge to the limit) or 2.
+  double coarse = NAN, fine = NAN;
+  check_stiff_friction("stiff_friction_1e-6", 0.05, &coarse);
+  check_stiff_friction("stiff_friction_1e-8", 0.05, &fine);
+  report("deviation ratio (m/k = 1e-6 vs 1e-8)", coarse / fine);
+  EXPECT_GE(coarse / fine, 50.0);
+  EXPECT_LE(coarse / fine, 200.0);
 }
 
 TEST(ExtremeCases, DiskLikeTopConservesInvariants) {
