@@ -123,9 +123,11 @@ IntegratorType auto_integrator(const SceneConfig& config) {
   switch (config.scene) {
     case SceneType::kFixedTip: return IntegratorType::kSplitting6;
     case SceneType::kFrictionless: return IntegratorType::kGauss6;
-    case SceneType::kViscous:
-      return motion_rates(config).friction * config.integrator.step > 1.0 ? IntegratorType::kRadau5
-                                                                          : IntegratorType::kDopri5;
+    case SceneType::kViscous: {
+      // Compare the friction time with the substep radau5 would actually take.
+      const double substep = std::min(config.integrator.step, 0.5 * largest_fixed_step(config, IntegratorType::kRadau5));
+      return motion_rates(config).friction * substep > 1.0 ? IntegratorType::kRadau5 : IntegratorType::kDopri5;
+    }
   }
   return IntegratorType::kDopri5;
 }

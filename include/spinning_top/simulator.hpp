@@ -72,7 +72,8 @@ double largest_fixed_step(const SceneConfig& config, IntegratorType type);
 
 /// What `integrator: auto` runs for this configuration (doc/integrators.md, "auto"):
 ///   fixed_tip -> splitting6, frictionless -> gauss6 (both geometric), viscous -> radau5 when the
-///   friction time 1/lambda = m / (k (1 + m h^2 / A)) is shorter than the step, else dopri5.
+///   friction time 1/lambda = m / (k (1 + m h^2 / A)) is shorter than radau5's substep (below),
+///   else dopri5.
 /// Fixed-step choices run at min(step, largest_fixed_step / 2).
 IntegratorType auto_integrator(const SceneConfig& config);
 
