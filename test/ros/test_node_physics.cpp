@@ -135,6 +135,20 @@ TEST(Node, InvalidReconfigureIsRefusedAndSimulationContinues) {
   EXPECT_GT(messages.back().header.stamp, messages.front().header.stamp);
 }
 
+// A live rate change: ticks then advance by the new 1/rate exactly (stamps to 2 ns).
+TEST(Node, LiveRateChangeGivesTheNewTickExactly) {
+  ros::NodeHandle nh;
+  const double rate = param("/spinning_top/rate");
+  ASSERT_EQ(reconfigure("rate", 250.0), 250.0);
+  ros::WallDuration(0.3).sleep();  // let ticks at the old rate arrive first
+  Recorder<geometry_msgs::PointStamped> points(nh, "/spinning_top/contact_point");
+  ASSERT_TRUE(wait_for([&] { return points.size() >= 100; }, 10.0));
+  EXPECT_EQ(reconfigure("rate", rate), rate);
+  const auto messages = points.messages();
+  for (size_t i = 1; i < 100; ++i)
+    ASSERT_NEAR((messages[i].header.stamp - messages[i - 1].header.stamp).toSec(), 1.0 / 250.0, 2e-9) << i;
+}
+
 // ~pause stops the ticks (no message, no tf, so no repeated stamps); ~step advances one
 // tick; ~resume continues one tick after the last stamp; ~reset brings back the initial
 // attitude while the stamps keep moving forward.
