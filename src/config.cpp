@@ -24,7 +24,7 @@ const std::vector<ParameterSpec>& parameter_specs() {
       {"initial/velocity_y", "m/s", "0", false, "initial horizontal velocity of G, y (viscous scene only)"},
       {"integrator", "", "auto", false,
        "auto (splitting6 for fixed_tip, gauss6 for frictionless, radau5 for viscous when the friction time m/(k (1 + m h^2/A)) is "
-       "shorter than step, dopri5 otherwise) | rk4 (fixed step) | dopri5 (adaptive, dense output) | "
+       "shorter than step, dop853 otherwise) | rk4 (fixed step) | dopri5 (adaptive, dense output) | dop853 (adaptive, order 8) | "
        "splitting4 | splitting6 | splitting8 (fixed_tip only: geometric, exact omega_Z and L_z, bounded "
        "energy error) | gauss6 (fixed_tip, frictionless: geometric, same invariants) | radau5 (Radau IIA, L-stable, fixed step: stiff friction) | rodas4 (Rosenbrock, "
        "fixed step: moderately stiff friction)"},

@@ -8,6 +8,7 @@
 #include <type_traits>
 
 #include "spinning_top/drivers.hpp"
+#include "spinning_top/integrators/dop853.hpp"
 #include "spinning_top/integrators/dormand_prince.hpp"
 #include "spinning_top/integrators/gauss.hpp"
 #include "spinning_top/integrators/radau.hpp"
@@ -44,6 +45,7 @@ const char* to_string(IntegratorType integrator) {
     case IntegratorType::kAuto: return "auto";
     case IntegratorType::kRk4: return "rk4";
     case IntegratorType::kDopri5: return "dopri5";
+    case IntegratorType::kDop853: return DormandPrince853<FixedTip>::kName;
     case IntegratorType::kSplitting4: return BlanesMoan4::kName;
     case IntegratorType::kSplitting6: return KahanLi6::kName;
     case IntegratorType::kSplitting8: return KahanLi8::kName;
@@ -56,7 +58,8 @@ const char* to_string(IntegratorType integrator) {
 
 namespace {
 constexpr IntegratorType kAllIntegrators[] = {
-    IntegratorType::kAuto,       IntegratorType::kRk4,        IntegratorType::kDopri5, IntegratorType::kSplitting4,
+    IntegratorType::kAuto,       IntegratorType::kRk4,        IntegratorType::kDopri5, IntegratorType::kDop853,
+    IntegratorType::kSplitting4,
     IntegratorType::kSplitting6, IntegratorType::kSplitting8, IntegratorType::kGauss6,      IntegratorType::kRadau5,
     IntegratorType::kRodas4};
 
@@ -112,7 +115,8 @@ MotionRates motion_rates(const SceneConfig& config) {
 }
 
 double largest_fixed_step(const SceneConfig& config, IntegratorType type) {
-  if (type == IntegratorType::kAuto || type == IntegratorType::kDopri5) return std::numeric_limits<double>::infinity();
+  if (type == IntegratorType::kAuto || type == IntegratorType::kDopri5 || type == IntegratorType::kDop853)
+    return std::numeric_limits<double>::infinity();
   const MotionRates rates = motion_rates(config);
   double fastest = rates.fastest_oscillation();
   if (type == IntegratorType::kRk4) fastest = std::max(fastest, rates.friction);
@@ -126,7 +130,7 @@ IntegratorType auto_integrator(const SceneConfig& config) {
     case SceneType::kViscous: {
       // Compare the friction time with the substep radau5 would actually take.
       const double substep = std::min(config.integrator.step, 0.5 * largest_fixed_step(config, IntegratorType::kRadau5));
-      return motion_rates(config).friction * substep > 1.0 ? IntegratorType::kRadau5 : IntegratorType::kDopri5;
+      return motion_rates(config).friction * substep > 1.0 ? IntegratorType::kRadau5 : IntegratorType::kDop853;
     }
   }
   return IntegratorType::kDopri5;
@@ -273,6 +277,7 @@ std::unique_ptr<Simulator> make_for_model(const SceneConfig& config) {
     case IntegratorType::kAuto: break;
     case IntegratorType::kRk4: return make_scene<Model, FixedStepDriver<Model, ClassicalRk4<Model>>>(config);
     case IntegratorType::kDopri5: return make_scene<Model, AdaptiveDriver<Model, DormandPrince54<Model>>>(config);
+    case IntegratorType::kDop853: return make_scene<Model, AdaptiveDriver<Model, DormandPrince853<Model>>>(config);
     case IntegratorType::kGauss6:
       if constexpr (!std::is_same_v<Model, Viscous>)
         return make_scene<Model, FixedStepDriver<Model, ReducedGauss6<Model>>>(config);

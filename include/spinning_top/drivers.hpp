@@ -9,6 +9,7 @@
 #include <cmath>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 
 #include "spinning_top/events.hpp"
 #include "spinning_top/kinematics.hpp"
@@ -121,6 +122,13 @@ class FixedStepDriver : public DriverBase<Model> {
   Method method_;
 };
 
+/// True for embedded pairs whose dense output needs extra evaluations of f (DOP853).
+template <class Method, class = void>
+struct dense_output_needs_model : std::false_type {};
+template <class Method>
+struct dense_output_needs_model<Method, std::void_t<decltype(Method::kDenseNeedsModel)>>
+    : std::bool_constant<Method::kDenseNeedsModel> {};
+
 template <class Model, class Method>
 class AdaptiveDriver : public DriverBase<Model> {
  public:
@@ -203,7 +211,10 @@ class AdaptiveDriver : public DriverBase<Model> {
       const double exponent = 1.0 / (Method::kEmbeddedOrder + 1);
       if (std::isfinite(err) && err <= 1.0 && all_finite(attempt.f1)) {
         const double factor = std::pow(err, exponent - 0.75 * kBeta) / std::pow(previous_error_, kBeta);
-        method_.prepare_dense(y_, f_, attempt, t_, dt_, dense_);
+        if constexpr (dense_output_needs_model<Method>::value)
+          method_.prepare_dense(model, y_, f_, attempt, t_, dt_, dense_);
+        else
+          method_.prepare_dense(y_, f_, attempt, t_, dt_, dense_);
         has_dense_ = true;
         const double t_new = t_ + dt_;
         State y_new = attempt.y1;
