@@ -66,6 +66,7 @@ class RadauIIA5 {
     Stages z = Stages::Zero(), f_stages, residual;
     Jacobian j0;
     finite_difference_jacobian(model, y0, j0);
+    const double stiffness = dt * j0.cwiseAbs().rowwise().sum().maxCoeff();  // dt |J|_inf
     NewtonMatrix matrix;
     build_matrix(dt, {j0, j0, j0}, matrix);
     Eigen::PartialPivLU<NewtonMatrix> lu(matrix);
@@ -89,7 +90,11 @@ class RadauIIA5 {
       if (norm <= kTolerance) break;
       if (iterations_ >= 2 && contraction < 1.0 && contraction / (1.0 - contraction) * norm <= kTolerance) break;
       if (iterations_ >= 3 && contraction >= 1.0 && norm <= 1e3 * kTolerance) break;
-      if (iterations_ >= 2 && contraction > 0.3) {
+      // Stiff (|J| dt >> 1): the first iteration has put the stage attitudes in place (they
+      // are not stiff), so the stiff directions are now known at the stages; refactor there
+      // once rather than let J(y0)'s turned stiff subspace push the iterate far away.
+      const bool stiff_first_iteration = iterations_ == 1 && stiffness > 10.0;
+      if (stiff_first_iteration || (iterations_ >= 2 && contraction > 0.3)) {
         Jacobian j1, j2, j3;
         finite_difference_jacobian(model, State(y0 + z.template segment<kN>(0)), j1);
         finite_difference_jacobian(model, State(y0 + z.template segment<kN>(kN)), j2);
