@@ -80,6 +80,26 @@ BodyShape body_shape(const TopParameters& top) {
   return {std::max(height, 1e-3), radius};
 }
 
+/// Keys of our private namespace that nobody reads (typos such as ~mas): warned about, not
+/// fatal, since other tools may store things there.
+void warn_about_unknown_keys(const ros::NodeHandle& private_nh) {
+  static const char* const node_keys[] = {
+      "rate", "real_time_factor", "publish_clock", "start_paused", "world_frame", "body_frame",
+      "contact_frame", "marker_rate", "trace_length", "trace_resolution", "force_scale",
+      "energy_drift_warning", "energy_drift_error", "quaternion_norm_error", "constraint_error"};
+  std::vector<std::string> names;
+  if (!ros::param::getParamNames(names)) return;
+  const std::string prefix = private_nh.getNamespace() + "/";
+  for (const std::string& name : names) {
+    if (name.compare(0, prefix.size(), prefix) != 0) continue;
+    const std::string key = name.substr(prefix.size());
+    bool known = false;
+    for (const ParameterSpec& spec : parameter_specs()) known = known || key == spec.key;
+    for (const char* node_key : node_keys) known = known || key == node_key;
+    if (!known) ROS_WARN("spinning_top: ignoring unknown parameter %s", name.c_str());
+  }
+}
+
 }  // namespace
 
 NodeSettings read_node_settings(const ros::NodeHandle& nh) {
@@ -127,6 +147,7 @@ SpinningTopNode::SpinningTopNode(ros::NodeHandle nh, ros::NodeHandle private_nh)
   // Everything is read and validated before anything is advertised.
   settings_ = read_node_settings(private_nh_);
   simulator_ = make_simulator(parse_scene_config(read_scene_parameters(private_nh_), /*require_all=*/false));
+  warn_about_unknown_keys(private_nh_);
   paused_ = settings_.start_paused;
   // Under use_sim_time our own /clock is the time base and starts at the first tick (never
   // 0); otherwise stamps start at the wall time of the start, so that tf users on wall time
