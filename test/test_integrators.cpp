@@ -276,6 +276,23 @@ TEST(RefusedSteps, FixedStepBeyondTheNutationIsRefusedNamingStep) {
   EXPECT_NO_THROW(make_simulator(config));
 }
 
+TEST(RefusedSteps, ExplicitRk4BeyondTheFrictionStabilityLimitIsRefused) {
+  SceneConfig config;
+  config.scene = SceneType::kViscous;
+  config.initial = nutating_top();
+  config.top.friction = 1e3;  // lambda = 2e4 1/s: rk4's limit 2/lambda = 1e-4 s < 1e-3 s
+  config.integrator.type = IntegratorType::kRk4;
+  try {
+    make_simulator(config);
+    FAIL() << "rk4 at lambda dt = 20 was accepted";
+  } catch (const InvalidParameter& e) {
+    EXPECT_EQ(e.parameter(), "step");
+    EXPECT_NE(std::string(e.what()).find("friction"), std::string::npos) << e.what();
+  }
+  config.integrator.type = IntegratorType::kRadau5;  // L-stable: only the motion limits it
+  EXPECT_NO_THROW(make_simulator(config));
+}
+
 TEST(RefusedSteps, AutoShortensTheSubstepInsteadAndStaysFinite) {
   SceneConfig config;
   config.initial = nutating_top();
