@@ -1,0 +1,168 @@
+// Shared by the test_core gtests: configurations of the toy top, geometry read off a
+// Snapshot, and the closed forms of ../shared/spec/PHYSICS.md ("Invariants and balances")
+// that the tests compare against: the steady-precession quadratic, the turning-point cubic
+// in u = cos(theta), and one-dimensional quadratures.
+#pragma once
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <functional>
+#include <memory>
+#include <utility>
+#include <vector>
+
+#include "spinning_top/simulator.hpp"
+
+namespace spinning_top {
+namespace core_test {
+
+/// Prints a measured figure next to the test's output (the numbers doc/physics_tests.md quotes).
+inline void report(const char* what, double value) { std::printf("[ measured ] %s = %.6g\n", what, value); }
+
+/// The toy top of config/*.yaml: m 0.1 kg, A 4e-5, C 6e-5 kg m^2, h 0.02 m, g 9.80665.
+inline TopParameters toy_top() { return TopParameters(); }
+
+inline SceneConfig adaptive(SceneType scene, const InitialConditions& initial, double tolerance,
+                            const TopParameters& top = toy_top()) {
+  SceneConfig config;
+  config.scene = scene;
+  config.top = top;
+  config.initial = initial;
+  config.integrator.type = IntegratorType::kDopri5;
+  config.integrator.tolerance = tolerance;
+  return config;
+}
+
+inline SceneConfig fixed_step(SceneType scene, const InitialConditions& initial, double step,
+                              const TopParameters& top = toy_top()) {
+  SceneConfig config = adaptive(scene, initial, 1e-10, top);
+  config.integrator.type = IntegratorType::kRk4;
+  config.integrator.step = step;
+  return config;
+}
+
+/// e_Z in world components.
+inline Vector3 axis_of(const Snapshot& s) { return s.attitude * Vector3::UnitZ(); }
+/// e_Zz = cos(theta).
+inline double cos_tilt(const Snapshot& s) { return axis_of(s).z(); }
+/// theta, from atan2 (accurate also near 0).
+inline double tilt(const Snapshot& s) {
+  const Vector3 e = axis_of(s);
+  return std::atan2(std::hypot(e.x(), e.y()), e.z());
+}
+/// phi from e_Z = (sin(theta) sin(phi), -sin(theta) cos(phi), cos(theta)) (PHYSICS.md, z-x-z).
+inline double heading(const Snapshot& s) {
+  const Vector3 e = axis_of(s);
+  return std::atan2(e.x(), -e.y());
+}
+/// Rotation angle between two attitudes [rad] (q and -q are the same attitude).
+inline double attitude_difference(const Quaternion& a, const Quaternion& b) {
+  return 2.0 * std::asin(std::min(1.0, (a.conjugate() * b).vec().norm()));
+}
+
+/// The world-frame angular velocity and the tip velocity v_P = v_G - h w x e_Z (PHYSICS.md,
+/// contact constraint), rebuilt from a snapshot's outputs independently of the models.
+inline Vector3 world_rates(const Snapshot& s) { return s.attitude * s.body_rates; }
+inline Vector3 tip_velocity(const Snapshot& s, double h) {
+  return s.outputs.center_of_mass_velocity - h * world_rates(s).cross(axis_of(s));
+}
+
+/// Roots of A' W^2 cos(theta) - C wZ W + m g h = 0 (PHYSICS.md, steady precession), A' = A0
+/// for the fixed tip, A for the frictionless top: {slow, fast}. The slow root is written
+/// 2 m g h / (C wZ + sqrt(D)) so that it does not cancel.
+inline std::pair<double, double> steady_precession_rates(double transverse, const TopParameters& p, double theta,
+                                                         double spin) {
+  const double a = transverse * std::cos(theta), b = p.inertia_axial * spin;
+  const double c = p.mass * p.gravity * p.tip_distance;
+  const double root = std::sqrt(b * b - 4.0 * a * c);
+  return {2.0 * c / (b + root), (b + root) / (2.0 * a)};
+}
+
+/// f(u) = (2/A')(E' - m g h u)(1 - u^2) - ((L_z - C wZ u)/A')^2, E' = E - C wZ^2 / 2
+/// (PHYSICS.md, integrable cases): u' ^2 = f(u) for the fixed tip (A' = A0); for the
+/// frictionless top u'^2 = f(u) / (1 + (m h^2/A)(1 - u^2)) with A' = A, same roots.
+struct TurningPointCubic {
+  double transverse, reduced_energy, vertical_momentum, axial_momentum, weight_moment;
+  double operator()(double u) const {
+    const double p = vertical_momentum - axial_momentum * u;
+    return 2.0 / transverse * (reduced_energy - weight_moment * u) * (1.0 - u * u) -
+           p * p / (transverse * transverse);
+  }
+};
+
+inline TurningPointCubic turning_point_cubic(double transverse, const TopParameters& p, double spin,
+                                             const Snapshot& initial) {
+  return {transverse, initial.outputs.energy - 0.5 * p.inertia_axial * spin * spin,
+          initial.outputs.vertical_angular_momentum, p.inertia_axial * spin,
+          p.mass * p.gravity * p.tip_distance};
+}
+
+/// The roots of f in [lo, hi]: sign changes on a fine grid, refined by bisection to round-off.
+inline std::vector<double> roots_in(const std::function<double(double)>& f, double lo, double hi, int grid = 20000) {
+  std::vector<double> roots;
+  double a = lo, fa = f(lo);
+  for (int i = 1; i <= grid; ++i) {
+    const double b = lo + (hi - lo) * i / grid, fb = f(b);
+    if (fa == 0.0) roots.push_back(a);
+    else if (fa * fb < 0.0) {
+      double x0 = a, x1 = b, f0 = fa;
+      for (int k = 0; k < 200 && x1 - x0 > 1e-16; ++k) {
+        const double xm = 0.5 * (x0 + x1), fm = f(xm);
+        if (fm * f0 > 0.0) { x0 = xm; f0 = fm; } else { x1 = xm; }
+      }
+      roots.push_back(0.5 * (x0 + x1));
+    }
+    a = b;
+    fa = fb;
+  }
+  return roots;
+}
+
+/// Adaptive Simpson quadrature (Lyness), to an absolute tolerance.
+inline double simpson_step(const std::function<double(double)>& f, double a, double b, double fa, double fm,
+                           double fb, double whole, double tolerance, int depth) {
+  const double m = 0.5 * (a + b), lm = 0.5 * (a + m), rm = 0.5 * (m + b);
+  const double flm = f(lm), frm = f(rm);
+  const double left = (m - a) / 6.0 * (fa + 4.0 * flm + fm), right = (b - m) / 6.0 * (fm + 4.0 * frm + fb);
+  if (depth <= 0 || std::abs(left + right - whole) <= 15.0 * tolerance)
+    return left + right + (left + right - whole) / 15.0;
+  return simpson_step(f, a, m, fa, flm, fm, left, 0.5 * tolerance, depth - 1) +
+         simpson_step(f, m, b, fm, frm, fb, right, 0.5 * tolerance, depth - 1);
+}
+inline double integrate(const std::function<double(double)>& f, double a, double b, double tolerance) {
+  const double fa = f(a), fm = f(0.5 * (a + b)), fb = f(b);
+  return simpson_step(f, a, b, fa, fm, fb, (b - a) / 6.0 * (fa + 4.0 * fm + fb), tolerance, 50);
+}
+
+/// Local extrema of uniformly sampled values, each refined by the vertex of the parabola
+/// through it and its two neighbours (error O(dt^4) of the sampled curve's scale).
+struct Extrema {
+  std::vector<double> maxima, minima;
+};
+inline Extrema sampled_extrema(const std::vector<double>& u) {
+  Extrema e;
+  for (size_t i = 1; i + 1 < u.size(); ++i) {
+    const double curvature = u[i + 1] - 2.0 * u[i] + u[i - 1];
+    if (curvature == 0.0) continue;
+    const double vertex = u[i] - (u[i + 1] - u[i - 1]) * (u[i + 1] - u[i - 1]) / (8.0 * curvature);
+    if (u[i] >= u[i - 1] && u[i] > u[i + 1]) e.maxima.push_back(vertex);
+    if (u[i] <= u[i - 1] && u[i] < u[i + 1]) e.minima.push_back(vertex);
+  }
+  return e;
+}
+
+/// cos(theta) sampled every dt up to duration (dense output for adaptive methods).
+inline std::vector<double> sample_cos_tilt(Simulator& sim, double dt, double duration) {
+  std::vector<double> u;
+  const int n = static_cast<int>(std::lround(duration / dt));
+  for (int i = 0; i <= n; ++i) {
+    EXPECT_EQ(sim.advance_to(i * dt), Event::kNone);
+    u.push_back(cos_tilt(sim.snapshot()));
+  }
+  return u;
+}
+
+}  // namespace core_test
+}  // namespace spinning_top
