@@ -1,0 +1,221 @@
+// Every invalid input is refused with InvalidParameter naming the configuration key (issue 2:
+// finite numbers only; m, A, C > 0; h, g, k >= 0; C <= 2A; the axis above the floor; friction
+// and G's initial velocity only where there is friction; a usable step and tolerance; known
+// scene and integrator names; no unknown key, no missing required key in a scene file).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <functional>
+#include <limits>
+#include <string>
+
+#include "core_test_support.hpp"
+#include "spinning_top/config.hpp"
+
+namespace spinning_top {
+namespace {
+using namespace core_test;
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+/// A valid viscous configuration (every key in use) that each case spoils in one place.
+SceneConfig valid_viscous() {
+  InitialConditions ic;
+  ic.tilt = 0.3;
+  ic.spin = 150.0;
+  ic.velocity_x = 0.01;
+  TopParameters top = toy_top();
+  top.friction = 0.5;
+  return adaptive(SceneType::kViscous, ic, 1e-10, top);
+}
+
+/// make_simulator must throw InvalidParameter whose parameter() is `key` and whose message
+/// starts with it.
+void expect_refused(const SceneConfig& config, const std::string& key, const std::string& what) {
+  try {
+    make_simulator(config);
+    ADD_FAILURE() << what << ": accepted, expected InvalidParameter(" << key << ")";
+  } catch (const InvalidParameter& e) {
+    EXPECT_EQ(e.parameter(), key) << what << ": " << e.what();
+    EXPECT_EQ(std::string(e.what()).rfind(key + ": ", 0), 0u) << what << ": " << e.what();
+  }
+}
+
+void expect_refused(const std::string& key, const std::function<void(SceneConfig&)>& spoil, const std::string& what,
+                    SceneConfig config = valid_viscous()) {
+  spoil(config);
+  expect_refused(config, key, what);
+}
+
+TEST(InvalidParameters, ValidBaseConfigurationAndBoundaryValuesAreAccepted) {
+  EXPECT_NO_THROW(make_simulator(valid_viscous()));
+  SceneConfig boundary = valid_viscous();
+  boundary.top.inertia_axial = 2.0 * boundary.top.inertia_transverse;  // a flat disc: C = 2A
+  boundary.top.tip_distance = 0.0;
+  boundary.top.gravity = 0.0;
+  boundary.top.friction = 0.0;
+  boundary.initial.tilt = -1.5;
+  EXPECT_NO_THROW(make_simulator(boundary));
+}
+
+TEST(InvalidParameters, NonFiniteNumbersNameTheirKey) {
+  for (double bad : {kNaN, kInf, -kInf}) {
+    expect_refused("mass", [&](SceneConfig& c) { c.top.mass = bad; }, "m non-finite");
+    expect_refused("inertia_transverse", [&](SceneConfig& c) { c.top.inertia_transverse = bad; }, "A non-finite");
+    expect_refused("inertia_axial", [&](SceneConfig& c) { c.top.inertia_axial = bad; }, "C non-finite");
+    expect_refused("tip_distance", [&](SceneConfig& c) { c.top.tip_distance = bad; }, "h non-finite");
+    expect_refused("gravity", [&](SceneConfig& c) { c.top.gravity = bad; }, "g non-finite");
+    expect_refused("friction", [&](SceneConfig& c) { c.top.friction = bad; }, "k non-finite");
+    expect_refused("initial/tilt", [&](SceneConfig& c) { c.initial.tilt = bad; }, "theta0 non-finite");
+    expect_refused("initial/precession_rate", [&](SceneConfig& c) { c.initial.precession_rate = bad; }, "phidot0");
+    expect_refused("initial/nutation_rate", [&](SceneConfig& c) { c.initial.nutation_rate = bad; }, "thetadot0");
+    expect_refused("initial/spin", [&](SceneConfig& c) { c.initial.spin = bad; }, "omega_Z non-finite");
+    expect_refused("initial/heading", [&](SceneConfig& c) { c.initial.heading = bad; }, "phi0 non-finite");
+    expect_refused("initial/spin_angle", [&](SceneConfig& c) { c.initial.spin_angle = bad; }, "psi0 non-finite");
+    expect_refused("initial/velocity_x", [&](SceneConfig& c) { c.initial.velocity_x = bad; }, "vx non-finite");
+    expect_refused("initial/velocity_y", [&](SceneConfig& c) { c.initial.velocity_y = bad; }, "vy non-finite");
+    expect_refused("step", [&](SceneConfig& c) { c.integrator.step = bad; }, "step non-finite");
+    expect_refused("tolerance", [&](SceneConfig& c) { c.integrator.tolerance = bad; }, "tolerance non-finite");
+  }
+}
+
+TEST(InvalidParameters, MassAndMomentsOfInertiaMustBePositive) {
+  for (double bad : {0.0, -1e-3}) {
+    expect_refused("mass", [&](SceneConfig& c) { c.top.mass = bad; }, "m <= 0");
+    expect_refused("inertia_transverse", [&](SceneConfig& c) { c.top.inertia_transverse = bad; }, "A <= 0");
+    expect_refused("inertia_axial", [&](SceneConfig& c) { c.top.inertia_axial = bad; }, "C <= 0");
+  }
+}
+
+TEST(InvalidParameters, TipDistanceGravityAndFrictionMustNotBeNegative) {
+  expect_refused("tip_distance", [](SceneConfig& c) { c.top.tip_distance = -1e-3; }, "h < 0");
+  expect_refused("gravity", [](SceneConfig& c) { c.top.gravity = -9.8; }, "g < 0");
+  expect_refused("friction", [](SceneConfig& c) { c.top.friction = -0.1; }, "k < 0");
+}
+
+// 2A - C = 2 integral z^2 dm >= 0 for any rigid body.
+TEST(InvalidParameters, AxialMomentAboveTwiceTheTransverseIsNoRigidBody) {
+  expect_refused("inertia_axial", [](SceneConfig& c) { c.top.inertia_axial = 2.0 * c.top.inertia_transverse * (1 + 1e-12); },
+                 "C > 2A");
+}
+
+// The double M_PI / 2 lies 6e-17 below pi/2 (cos = 6e-17 > 0, a valid start at the floor that
+// falls at once), so the first refused tilts are the doubles just above pi/2.
+TEST(InvalidParameters, AxisMustStartAboveTheFloor) {
+  for (double bad : {std::nextafter(M_PI / 2, 2.0), -std::nextafter(M_PI / 2, 2.0), 2.0, M_PI, -3.0})
+    expect_refused("initial/tilt", [&](SceneConfig& c) { c.initial.tilt = bad; }, "|theta0| >= pi/2");
+}
+
+TEST(InvalidParameters, FrictionAndInitialVelocityOnlyInTheViscousScene) {
+  for (SceneType scene : {SceneType::kFixedTip, SceneType::kFrictionless}) {
+    SceneConfig config = valid_viscous();
+    config.scene = scene;
+    config.initial.velocity_x = config.initial.velocity_y = 0.0;
+    expect_refused("friction", [](SceneConfig&) {}, "k > 0 without friction", config);
+    config.top.friction = 0.0;
+    EXPECT_NO_THROW(make_simulator(config)) << to_string(scene);
+    expect_refused("initial/velocity_x", [](SceneConfig& c) { c.initial.velocity_x = 0.1; }, "vx", config);
+    expect_refused("initial/velocity_y", [](SceneConfig& c) { c.initial.velocity_y = -0.1; }, "vy", config);
+  }
+}
+
+TEST(InvalidParameters, StepAndToleranceMustBeUsable) {
+  SceneConfig rk4 = valid_viscous();
+  rk4.integrator.type = IntegratorType::kRk4;
+  for (double bad : {0.0, -1e-3})
+    expect_refused("step", [&](SceneConfig& c) { c.integrator.step = bad; }, "step <= 0", rk4);
+  expect_refused("step", [](SceneConfig& c) { c.integrator.step = 1.0; }, "step beyond the nutation", rk4);
+  for (double bad : {0.0, -1e-8, 1e-16, 1.0, 2.0})
+    expect_refused("tolerance", [&](SceneConfig& c) { c.integrator.tolerance = bad; }, "tolerance out of range");
+}
+
+TEST(InvalidParameters, UnknownSceneAndIntegratorNames) {
+  EXPECT_THROW(parse_scene("sliding"), InvalidParameter);
+  try {
+    parse_scene("Fixed_Tip");
+    ADD_FAILURE() << "scene names are case-sensitive";
+  } catch (const InvalidParameter& e) {
+    EXPECT_EQ(e.parameter(), "scene");
+  }
+  try {
+    parse_integrator("euler");
+    ADD_FAILURE() << "euler accepted";
+  } catch (const InvalidParameter& e) {
+    EXPECT_EQ(e.parameter(), "integrator");
+  }
+  EXPECT_EQ(parse_scene("viscous"), SceneType::kViscous);
+  EXPECT_EQ(parse_integrator("dopri5"), IntegratorType::kDopri5);
+}
+
+/// A complete scene file's keys (config/fixed_tip.yaml's required ones).
+ParameterMap scene_file() {
+  ParameterMap values;
+  for (const ParameterSpec& spec : parameter_specs())
+    if (spec.required_in_file) values[spec.key] = spec.default_value;
+  return values;
+}
+
+void expect_parse_refused(const ParameterMap& values, bool require_all, const std::string& key,
+                          const std::string& what) {
+  try {
+    parse_scene_config(values, require_all);
+    ADD_FAILURE() << what << ": accepted, expected InvalidParameter(" << key << ")";
+  } catch (const InvalidParameter& e) {
+    EXPECT_EQ(e.parameter(), key) << what << ": " << e.what();
+  }
+}
+
+TEST(InvalidParameters, ParsedKeysAreCheckedByName) {
+  EXPECT_NO_THROW(parse_scene_config(scene_file(), true));
+  // Each required key, missing from a scene file: refused naming it; the node's defaults fill it.
+  int required = 0;
+  for (const ParameterSpec& spec : parameter_specs()) {
+    if (!spec.required_in_file) continue;
+    ++required;
+    ParameterMap values = scene_file();
+    values.erase(spec.key);
+    expect_parse_refused(values, true, spec.key, std::string("missing ") + spec.key);
+    EXPECT_NO_THROW(parse_scene_config(values, false)) << spec.key;
+  }
+  EXPECT_GE(required, 6);  // scene, m, A, C, h, tilt, spin at least
+  ParameterMap values = scene_file();
+  values["masss"] = "0.1";
+  expect_parse_refused(values, true, "masss", "unknown key");
+  expect_parse_refused(values, false, "masss", "unknown key (node)");
+  for (const char* text : {"abc", "0.1kg", "", "1e999"}) {
+    values = scene_file();
+    values["mass"] = text;
+    expect_parse_refused(values, true, "mass", std::string("mass = '") + text + "'");
+  }
+  const std::pair<const char*, const char*> invalid_values[] = {
+      {"scene", "sliding"},        {"integrator", "euler"},      {"inertia_axial", "1e-4"},
+      {"initial/tilt", "1.5708"},  {"friction", "0.5"},          {"gravity", "-1"},
+      {"tolerance", "0"},          {"step", "-0.001"},           {"initial/velocity_x", "0.1"},
+      {"initial/spin", "nan"},     {"tip_distance", "-inf"}};
+  for (const auto& [key, text] : invalid_values) {
+    values = scene_file();
+    values[key] = text;
+    expect_parse_refused(values, true, key, std::string(key) + " = " + text);
+  }
+}
+
+// A refused update during a run changes nothing (the run continues with the old parameters).
+TEST(InvalidParameters, RefusedUpdateLeavesTheRunUnchanged) {
+  auto sim = make_simulator(valid_viscous());
+  ASSERT_EQ(sim->advance_to(0.01), Event::kNone);
+  TopParameters bad = sim->config().top;
+  bad.friction = -1.0;
+  try {
+    sim->update(bad, sim->config().integrator);
+    ADD_FAILURE() << "negative friction accepted";
+  } catch (const InvalidParameter& e) {
+    EXPECT_EQ(e.parameter(), "friction");
+  }
+  EXPECT_EQ(sim->config().top.friction, 0.5);
+  EXPECT_EQ(sim->time(), 0.01);
+  EXPECT_EQ(sim->advance_to(0.02), Event::kNone);
+}
+
+}  // namespace
+}  // namespace spinning_top
