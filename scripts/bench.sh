@@ -1,0 +1,42 @@
+#!/usr/bin/env bash
+# The benchmark command (doc/benchmark.md): builds the benchmark executables in Release, runs the
+# work-precision benchmark (ours vs Boost.Odeint, long-run energy) and the extreme-cases table,
+# then writes CSVs, PNG plots and bench/results/summary.md. Under 10 minutes on 2 cores.
+# Usage: scripts/bench.sh [--quick]   (--quick: fewer points and 1e5-step long runs, ~2 min)
+# Set SPINNING_TOP_BUILD to build elsewhere than build/.
+set -euo pipefail
+source "$(dirname "$0")/env.sh"
+start=$(date +%s)
+quick=()
+for arg in "$@"; do
+  case "$arg" in
+    --quick) quick=(--quick) ;;
+    *) echo "bench.sh: unknown option '$arg' (use --quick)" >&2; exit 2 ;;
+  esac
+done
+
+# Debian packages (plots need matplotlib): installs what is missing when run as root.
+if [ "$(id -u)" -eq 0 ]; then "$SPINNING_TOP_ROOT/scripts/setup.sh" --bench; fi
+
+echo "bench.sh: building the benchmarks in $SPINNING_TOP_BUILD (Release)"
+cmake -S "$SPINNING_TOP_ROOT" -B "$SPINNING_TOP_BUILD" \
+  -DPYTHON_EXECUTABLE=/usr/bin/python3 -DCMAKE_BUILD_TYPE="${CMAKE_BUILD_TYPE:-Release}" >/dev/null
+targets=(work_precision)
+grep -q "add_executable(extreme_cases" "$SPINNING_TOP_ROOT/bench/CMakeLists.txt" && targets+=(extreme_cases)
+cmake --build "$SPINNING_TOP_BUILD" --target "${targets[@]}" -- -j"$(nproc)"
+
+bin="$SPINNING_TOP_BUILD/devel/lib/spinning_top"
+results="$SPINNING_TOP_ROOT/bench/results"
+mkdir -p "$results"
+
+echo "bench.sh: work-precision benchmark (progress below)"
+"$bin/work_precision" --output-dir "$results" "${quick[@]}"
+
+if [ -x "$bin/extreme_cases" ]; then
+  echo "bench.sh: extreme cases"
+  "$bin/extreme_cases" --output-dir "$results"
+fi
+
+echo "bench.sh: plots and summary"
+/usr/bin/python3 "$SPINNING_TOP_ROOT/bench/plot_results.py" "$results"
+echo "bench.sh: done in $(( $(date +%s) - start )) s; results in $results (summary.md)"
