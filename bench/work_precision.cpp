@@ -456,7 +456,7 @@ void long_runs(const Scene& scene, const Options& opt, std::ofstream& csv) {
     } catch (const InvalidParameter&) {
       continue;
     }
-    const std::string setting = is_adaptive(c, type) ? "tolerance 1e-10" : "step 1e-3";
+    const std::string setting = type == IntegratorType::kAuto ? "defaults" : is_adaptive(c, type) ? "tolerance 1e-10" : "step 1e-3";
     std::string name = type == IntegratorType::kAuto ? "auto (" + sim->integrator_description() + ")" : to_string(type);
     std::replace(name.begin(), name.end(), ',', ';');  // a CSV field
     for (long i = 1; i <= samples; ++i) {
