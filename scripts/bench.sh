@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The benchmark command (doc/benchmark.md): builds the benchmark executables in Release, runs the
 # work-precision benchmark (ours vs Boost.Odeint, long-run energy) and the extreme-cases table,
-# then writes CSVs, PNG plots and bench/results/summary.md. Under 10 minutes on 2 cores.
+# then writes CSVs, PNG plots and bench/results/summary.md, and splices the tables into README.md. Under 10 minutes on 2 cores.
 # Usage: scripts/bench.sh [--quick]   (--quick: fewer points and 1e5-step long runs, ~2 min)
 # Set SPINNING_TOP_BUILD to build elsewhere than build/.
 set -euo pipefail
@@ -39,4 +39,8 @@ fi
 
 echo "bench.sh: plots and summary"
 /usr/bin/python3 "$SPINNING_TOP_ROOT/bench/plot_results.py" "$results"
+# The README shows the measured tables; a --quick run's coarse figures do not replace them.
+if [ ${#quick[@]} -eq 0 ]; then
+  /usr/bin/python3 "$SPINNING_TOP_ROOT/bench/update_readme.py" "$results" "$SPINNING_TOP_ROOT/README.md"
+fi
 echo "bench.sh: done in $(( $(date +%s) - start )) s; results in $results (summary.md)"

@@ -1,4 +1,4 @@
-// spinning_top_node: the ROS front end of the spinning-top simulator (see doc/node.md).
+// spinning_top_node: the ROS front end of the spinning-top simulator (see README.md, "The ROS node").
 #include <ros/ros.h>
 
 #include "spinning_top/ros/spinning_top_node.hpp"
