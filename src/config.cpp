@@ -27,7 +27,8 @@ const std::vector<ParameterSpec>& parameter_specs() {
        "shorter than step, dop853 otherwise) | rk4 (fixed step) | dopri5 (adaptive, dense output) | dop853 (adaptive, order 8) | "
        "splitting4 | splitting6 | splitting8 (fixed_tip only: geometric, exact omega_Z and L_z, bounded "
        "energy error) | gauss6 (fixed_tip, frictionless: geometric, same invariants) | radau5 (Radau IIA, L-stable, fixed step: stiff friction) | rodas4 (Rosenbrock, "
-       "fixed step: moderately stiff friction)"},
+       "fixed step: moderately stiff friction) | exact (fixed_tip, frictionless: closed-form solution by quadrature, "
+       "no step; refuses a few degenerate states, see doc/integrators.md)"},
       {"step", "s", "0.001", false,
        "largest substep of the fixed-step integrators; refused beyond 2 / (rate of the fastest motion), "
        "auto shortens it to half that instead"},

@@ -10,6 +10,7 @@
 #include "spinning_top/drivers.hpp"
 #include "spinning_top/integrators/dop853.hpp"
 #include "spinning_top/integrators/dormand_prince.hpp"
+#include "spinning_top/integrators/exact.hpp"
 #include "spinning_top/integrators/gauss.hpp"
 #include "spinning_top/integrators/radau.hpp"
 #include "spinning_top/integrators/rk4.hpp"
@@ -52,6 +53,7 @@ const char* to_string(IntegratorType integrator) {
     case IntegratorType::kGauss6: return "gauss6";
     case IntegratorType::kRadau5: return "radau5";
     case IntegratorType::kRodas4: return "rodas4";
+    case IntegratorType::kExact: return ExactDriver<FixedTip>::kName;
   }
   return "";
 }
@@ -61,7 +63,7 @@ constexpr IntegratorType kAllIntegrators[] = {
     IntegratorType::kAuto,       IntegratorType::kRk4,        IntegratorType::kDopri5, IntegratorType::kDop853,
     IntegratorType::kSplitting4,
     IntegratorType::kSplitting6, IntegratorType::kSplitting8, IntegratorType::kGauss6,      IntegratorType::kRadau5,
-    IntegratorType::kRodas4};
+    IntegratorType::kRodas4,     IntegratorType::kExact};
 
 bool is_splitting(IntegratorType type) {
   return type == IntegratorType::kSplitting4 || type == IntegratorType::kSplitting6 ||
@@ -115,7 +117,8 @@ MotionRates motion_rates(const SceneConfig& config) {
 }
 
 double largest_fixed_step(const SceneConfig& config, IntegratorType type) {
-  if (type == IntegratorType::kAuto || type == IntegratorType::kDopri5 || type == IntegratorType::kDop853)
+  if (type == IntegratorType::kAuto || type == IntegratorType::kDopri5 || type == IntegratorType::kDop853 ||
+      type == IntegratorType::kExact)
     return std::numeric_limits<double>::infinity();
   const MotionRates rates = motion_rates(config);
   double fastest = rates.fastest_oscillation();
@@ -149,6 +152,11 @@ void validate_step_against_motion(const SceneConfig& config) {
     throw InvalidParameter("integrator",
                            "gauss6 integrates the fixed tip and the frictionless top (whose attitude dynamics "
                            "close on the vertical and the body rates); use auto, radau5, dopri5 or rk4");
+  if (type == IntegratorType::kExact && config.scene == SceneType::kViscous)
+    throw InvalidParameter("integrator",
+                           "exact solves the fixed tip and the frictionless top by quadrature (they are integrable: "
+                           "energy, L_z and omega_Z are conserved); viscous friction dissipates energy, so the viscous "
+                           "top has no such solution; use auto, radau5, dop853 or dopri5");
   const double limit = largest_fixed_step(config, type);
   if (config.integrator.step <= limit) return;
   const MotionRates rates = motion_rates(config);
@@ -197,9 +205,17 @@ double fixed_substep(const SceneConfig& config) {
   return std::min(config.integrator.step, 0.5 * largest_fixed_step(config, auto_integrator(config)));
 }
 
+/// True for drivers without a step or tolerance (the closed-form ExactDriver).
+template <class Driver, class = void>
+struct is_closed_form : std::false_type {};
+template <class Driver>
+struct is_closed_form<Driver, std::void_t<decltype(Driver::kClosedForm)>> : std::bool_constant<Driver::kClosedForm> {};
+
 template <class Driver>
 Driver make_driver(const SceneConfig& config) {
-  if constexpr (Driver::kAdaptive) {
+  if constexpr (is_closed_form<Driver>::value) {
+    return Driver();
+  } else if constexpr (Driver::kAdaptive) {
     return Driver(config.integrator.tolerance);
   } else {
     return Driver(fixed_substep(config));
@@ -242,14 +258,17 @@ class SceneSimulator final : public Simulator {
       throw InvalidParameter("mass", "the top's mass, inertia and tip distance cannot change during a run");
     if (integrator.type != config_.integrator.type)
       throw InvalidParameter("integrator", "cannot change during a run");
+    // The new model and driver start from the current state before anything is replaced:
+    // a driver may refuse the state (exact: InvalidParameter), and then nothing has changed.
     Driver driver = make_driver<Driver>(next);
+    Model model(next.top, next.initial);
     const double t = driver_.time();
     const typename Model::State y = driver_.state();
     const Event event = driver_.event();
+    driver.reset(model, t, y);
     config_ = next;
-    model_ = Model(config_.top, config_.initial);
+    model_ = std::move(model);
     driver_ = std::move(driver);
-    driver_.reset(model_, t, y);
     if (event != Event::kNone) driver_.stop(event);  // a stopped run stays stopped until reset()
   }
 
@@ -284,6 +303,9 @@ std::unique_ptr<Simulator> make_for_model(const SceneConfig& config) {
       break;  // refused by validate()
     case IntegratorType::kRadau5: return make_scene<Model, FixedStepDriver<Model, RadauIIA5<Model>>>(config);
     case IntegratorType::kRodas4: return make_scene<Model, FixedStepDriver<Model, Rodas4<Model>>>(config);
+    case IntegratorType::kExact:
+      if constexpr (!std::is_same_v<Model, Viscous>) return make_scene<Model, ExactDriver<Model>>(config);
+      break;  // refused by validate()
     case IntegratorType::kSplitting4:
     case IntegratorType::kSplitting6:
     case IntegratorType::kSplitting8:

@@ -20,9 +20,11 @@ enum class SceneType { kFixedTip, kFrictionless, kViscous };
 /// and L_z exactly, bounded energy error), gauss6 (fixed tip and frictionless: Gauss-Legendre
 /// collocation on (q, Gamma, omega_perp), same invariants), radau5 (Radau IIA order 5, fixed step, L-stable:
 /// stiff friction), rodas4 (L-stable Rosenbrock, fixed step: moderately stiff friction only,
-/// see radau.hpp). doc/integrators.md explains the choice.
+/// see radau.hpp), exact (fixed tip and frictionless: the closed-form solution by quadrature,
+/// evaluated at each requested time, no step; integrators/exact.hpp). doc/integrators.md
+/// explains the choice.
 enum class IntegratorType {
-  kAuto, kRk4, kDopri5, kDop853, kSplitting4, kSplitting6, kSplitting8, kGauss6, kRadau5, kRodas4
+  kAuto, kRk4, kDopri5, kDop853, kSplitting4, kSplitting6, kSplitting8, kGauss6, kRadau5, kRodas4, kExact
 };
 
 const char* to_string(SceneType scene);
@@ -30,7 +32,7 @@ const char* to_string(IntegratorType integrator);
 /// Parses "fixed_tip" | "frictionless" | "viscous"; throws InvalidParameter("scene", ...).
 SceneType parse_scene(const std::string& name);
 /// Parses "auto" | "rk4" | "dopri5" | "dop853" | "splitting4" | "splitting6" | "splitting8" | "gauss6" |
-/// "radau5" | "rodas4";
+/// "radau5" | "rodas4" | "exact";
 /// throws InvalidParameter("integrator", ...).
 IntegratorType parse_integrator(const std::string& name);
 
@@ -69,7 +71,7 @@ MotionRates motion_rates(const SceneConfig& config);
 /// The largest fixed step [s] that `type` can take on this configuration: 2 / (fastest rate),
 /// i.e. at least pi steps per period of the fastest oscillation, and, for the explicit rk4 in
 /// the viscous scene, 2 / lambda (inside its stability interval, |R(-2)| < 1). Infinity for
-/// the adaptive dopri5 and for auto (which shortens its substep instead). validate() refuses
+/// the adaptive dopri5 and dop853, for exact (no step) and for auto (which shortens its substep instead). validate() refuses
 /// a larger step with InvalidParameter("step", ...) naming this limit.
 double largest_fixed_step(const SceneConfig& config, IntegratorType type);
 
