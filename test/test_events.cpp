@@ -28,34 +28,6 @@ EventRun run_until_event(const SceneConfig& config, double duration) {
   return run;
 }
 
-/// The spinless top falls in a vertical plane: with c = m g h / A' (A' = A0 fixed tip, A
-/// frictionless) and alpha = m h^2 / A for the sliding tip (0 for the fixed one), energy gives
-///   thetadot^2 (1 + alpha sin^2 theta) = thetadot0^2 + 2 c (cos theta0 - cos theta)
-/// (PHYSICS.md: the sliding top's kinetic energy gains 1/2 m h^2 sin^2 theta thetadot^2).
-struct PlanarFall {
-  double c, alpha, theta0, thetadot0;
-  /// thetadot at theta = theta0 + offset; cos theta0 - cos theta = 2 sin(theta0 + offset/2)
-  /// sin(offset/2) is free of cancellation (and of rounding theta0 + offset for tiny offsets).
-  double rate_at_offset(double offset) const {
-    const double drop = 2.0 * std::sin(theta0 + 0.5 * offset) * std::sin(0.5 * offset);
-    const double sine = std::sin(theta0 + offset);
-    return std::sqrt((thetadot0 * thetadot0 + 2.0 * c * drop) / (1.0 + alpha * sine * sine));
-  }
-  double rate(double theta) const { return rate_at_offset(theta - theta0); }
-  /// t(theta1) = integral from theta0 to theta1 of dtheta / thetadot. From rest the integrand
-  /// has an inverse square root at theta0: offset = s^2 makes it smooth.
-  double time_to(double theta1) const {
-    if (thetadot0 > 0.0) return integrate([&](double th) { return 1.0 / rate(th); }, theta0, theta1, 1e-15);
-    return integrate(
-        [&](double s) {
-          if (s == 0.0)  // limit of 2 s / rate: 2 / sqrt(c sin(theta0) / (1 + alpha sin^2 theta0))
-            return 2.0 * std::sqrt((1.0 + alpha * std::sin(theta0) * std::sin(theta0)) / (c * std::sin(theta0)));
-          return 2.0 * s / rate_at_offset(s * s);
-        },
-        0.0, std::sqrt(theta1 - theta0), 1e-15);
-  }
-};
-
 InitialConditions spinless(double tilt, double nutation_rate) {
   InitialConditions ic;
   ic.tilt = tilt;
