@@ -3,12 +3,19 @@
 // energy error of long runs.
 //
 // Usage: work_precision [--output-dir DIR] [--duration S] [--long-steps N] [--quick] [--scene NAME]
-// Writes DIR/work_precision.csv, DIR/long_run_energy.csv, DIR/reference_check.csv.
+// Writes DIR/work_precision.csv, DIR/long_run_energy.csv, DIR/reference_check.csv and
+// DIR/dense_sampling.csv (the cost of a state every 1 ms, what the node asks for).
 #include <time.h>
 
 #include <algorithm>
 #include <array>
+// GCC 12 flags odeint's copy of a stepper's scratch state (rkf78's m_x_tmp, overwritten before
+// use) as uninitialized, depending on inlining: a false positive inside Boost.
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wuninitialized"
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
 #include <boost/numeric/odeint.hpp>
+#pragma GCC diagnostic pop
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -268,7 +275,8 @@ void progress(const std::string& text) {
 const std::vector<IntegratorType> kOurIntegrators = {
     IntegratorType::kRk4,        IntegratorType::kDopri5,      IntegratorType::kDop853,
     IntegratorType::kSplitting4, IntegratorType::kSplitting6,  IntegratorType::kSplitting8,
-    IntegratorType::kGauss6,     IntegratorType::kRadau5,      IntegratorType::kRodas4};
+    IntegratorType::kGauss6,     IntegratorType::kRadau5,      IntegratorType::kRodas4,
+    IntegratorType::kExact};
 
 bool is_adaptive(const SceneConfig& c, IntegratorType type) { return std::isinf(largest_fixed_step(c, type)); }
 
@@ -307,17 +315,25 @@ void run_scene(const Scene& scene, Reference& ref, const Options& opt, std::vect
   for (const IntegratorType type : kOurIntegrators) {
     SceneConfig c = base;
     c.integrator.type = type;
+    // exact has neither step nor tolerance: one point (its cost does not depend on the accuracy).
+    const bool closed_form = type == IntegratorType::kExact;
     const bool adaptive = is_adaptive(c, type);
-    const std::vector<double> params = adaptive ? tolerances(opt.quick) : fixed_steps(opt.quick);
+    const std::vector<double> params =
+        closed_form ? std::vector<double>{0.0} : adaptive ? tolerances(opt.quick) : fixed_steps(opt.quick);
     for (const double p : params) {
-      if (adaptive) c.integrator.tolerance = p; else c.integrator.step = p;
+      if (closed_form) {
+      } else if (adaptive) {
+        c.integrator.tolerance = p;
+      } else {
+        c.integrator.step = p;
+      }
       std::unique_ptr<Simulator> sim;
       try {
         sim = make_simulator(c);
       } catch (const InvalidParameter& e) {
         continue;  // this method is not offered for this scene, or not at this step
       }
-      progress(scene.name + ": " + to_string(type) + (adaptive ? " tol " : " step ") + std::to_string(p));
+      progress(scene.name + ": " + to_string(type) + (closed_form ? "" : (adaptive ? " tol " : " step ") + std::to_string(p)));
       const double cpu = median_cpu([&] {
         sim->reset();
         sim->advance_to(duration);
@@ -341,7 +357,7 @@ void run_scene(const Scene& scene, Reference& ref, const Options& opt, std::vect
         err.add(s.attitude * Vector3::UnitZ(), r.axis, (s.outputs.energy + s.outputs.dissipated_energy - e0) / mgh,
                 s.outputs.normal_force / (base.top.mass * base.top.gravity), r.normal_force / (base.top.mass * base.top.gravity));
       }
-      rows.push_back({scene.name, "ours", to_string(type), adaptive ? "tolerance" : "step", p, cpu, err.attitude,
+      rows.push_back({scene.name, "ours", to_string(type), closed_form ? "none" : adaptive ? "tolerance" : "step", p, cpu, err.attitude,
                       err.energy, err.normal, steps});
       if (err.attitude < kErrorFloor || cpu > kMaxRunCpu) break;
     }
@@ -442,6 +458,93 @@ void run_scene(const Scene& scene, Reference& ref, const Options& opt, std::vect
   }
 }
 
+// ---------- dense sampling: a state every 1 ms, what the node pays ----------
+// The node asks for the state at every tick (1 ms). The ratio table above times one
+// advance_to(10 s) with output off; here every method answers all 10000 requests. Ours: exact,
+// auto (the node's default) and dop853 at 1e-10 (dense output); odeint: dopri5 through its dense
+// output, RKF78 through integrate_const (it has no dense output, so its steps are clipped at the
+// sample times). CPU only for the requests (advance_to / integrate_const), not the snapshots.
+struct DenseRow {
+  std::string scene, family, method, setting;
+  double cpu, attitude;
+  long samples;
+};
+
+template <class Model>
+void dense_sampling(const Scene& scene, Reference& ref, const Options& opt, std::vector<DenseRow>& rows) {
+  const SceneConfig& base = scene.config;
+  const double interval = 1e-3, tolerance = 1e-10;
+  const long n = std::lround(opt.duration / interval);
+  struct Ours {
+    IntegratorType type;
+    std::string setting;
+  };
+  for (const Ours& o : {Ours{IntegratorType::kExact, "closed form"}, Ours{IntegratorType::kAuto, "defaults (step 1e-3)"},
+                        Ours{IntegratorType::kDop853, "tolerance 1e-10"}}) {
+    SceneConfig c = base;
+    c.integrator.type = o.type;
+    c.integrator.tolerance = tolerance;
+    std::unique_ptr<Simulator> sim;
+    try {
+      sim = make_simulator(c);
+    } catch (const InvalidParameter&) {
+      continue;
+    }
+    progress(scene.name + ": dense sampling " + to_string(o.type));
+    const double cpu = median_cpu([&] {
+      sim->reset();
+      for (long i = 1; i <= n; ++i) sim->advance_to(i * interval);
+    });
+    sim->reset();
+    ref.restart();
+    Errors err;
+    for (long i = 0; i <= n; ++i) {
+      if (sim->advance_to(i * interval) != Event::kNone) break;
+      const Snapshot s = sim->snapshot();
+      const RefSample r = ref.at(i * interval);
+      err.add(s.attitude * Vector3::UnitZ(), r.axis, 0.0, 0.0, 0.0);
+    }
+    std::string name = o.type == IntegratorType::kAuto ? "auto (" + sim->integrator_description() + ")" : to_string(o.type);
+    std::replace(name.begin(), name.end(), ',', ';');
+    rows.push_back({scene.name, "ours", name, o.setting, cpu, err.attitude, n});
+  }
+  using Sys = OdeintSystem<Model>;
+  using Array = typename Sys::Array;
+  const Model model(base.top, base.initial);
+  const Sys sys{&model};
+  Array x0;
+  {
+    const typename Model::State y = model.initial_state();
+    for (int i = 0; i < Model::kStateSize; ++i) x0[i] = y[i];
+  }
+  auto grade = [&](const Array& x, double t, Errors& err) {
+    typename Model::State y;
+    for (int i = 0; i < Model::kStateSize; ++i) y[i] = x[i];
+    normalize_attitude(y);
+    err.add(attitude_of(y) * Vector3::UnitZ(), ref.at(t).axis, 0.0, 0.0, 0.0);
+  };
+  auto peer = [&](const std::string& name, auto make_stepper) {
+    progress(scene.name + ": dense sampling odeint " + name);
+    Array x;
+    const double cpu = median_cpu([&] {
+      x = x0;
+      auto stepper = make_stepper();
+      odeint::integrate_const(stepper, sys, x, 0.0, opt.duration + 0.5 * interval, interval);
+    });
+    x = x0;
+    ref.restart();
+    Errors err;
+    auto stepper = make_stepper();
+    odeint::integrate_const(stepper, sys, x, 0.0, opt.duration + 0.5 * interval, interval,
+                            [&](const Array& xs, double t) { grade(xs, t, err); });
+    rows.push_back({scene.name, "odeint", name, "tolerance 1e-10", cpu, err.attitude, n});
+  };
+  peer("runge_kutta_dopri5 (dense output)",
+       [&] { return odeint::make_dense_output(tolerance, tolerance, odeint::runge_kutta_dopri5<Array>()); });
+  peer("runge_kutta_fehlberg78 (steps clipped at samples)",
+       [&] { return odeint::make_controlled(tolerance, tolerance, odeint::runge_kutta_fehlberg78<Array>()); });
+}
+
 // ---------- long runs: energy error vs simulated time ----------
 template <class Model>
 void long_runs(const Scene& scene, const Options& opt, std::ofstream& csv) {
@@ -470,7 +573,10 @@ void long_runs(const Scene& scene, const Options& opt, std::ofstream& csv) {
     } catch (const InvalidParameter&) {
       continue;
     }
-    const std::string setting = type == IntegratorType::kAuto ? "defaults" : is_adaptive(c, type) ? "tolerance 1e-10" : "step 1e-3";
+    const std::string setting = type == IntegratorType::kAuto    ? "defaults"
+                                : type == IntegratorType::kExact ? "closed form"
+                                : is_adaptive(c, type)           ? "tolerance 1e-10"
+                                                                 : "step 1e-3";
     std::string name = type == IntegratorType::kAuto ? "auto (" + sim->integrator_description() + ")" : to_string(type);
     std::replace(name.begin(), name.end(), ',', ';');  // a CSV field
     for (long i = 1; i <= samples; ++i) {
@@ -553,7 +659,7 @@ int main(int argc, char** argv) {
       std::cerr << "usage: work_precision [--output-dir DIR] [--duration S] [--long-steps N] [--quick] [--scene NAME]\n"
                    "Error vs CPU time of the core's integrators and Boost.Odeint's on the toy top (m 0.1,\n"
                    "A 4e-5, C 6e-5, h 0.02, spin 150, tilt 0.3) in each scene; writes work_precision.csv,\n"
-                   "long_run_energy.csv and reference_check.csv to DIR (doc/benchmark.md).\n";
+                   "long_run_energy.csv, reference_check.csv and dense_sampling.csv to DIR (doc/benchmark.md).\n";
       return arg == "--help" ? 0 : 2;
     }
   }
@@ -571,6 +677,7 @@ int main(int argc, char** argv) {
                                  "scene,what,value");
   check.precision(10);
   std::vector<Row> rows;
+  std::vector<DenseRow> dense_rows;
   for (const Scene& scene : scenes) {
     if (!opt.only_scene.empty() && scene.name != opt.only_scene) continue;
     const auto grade_numerical = [&](Reference& ref, IntegratorType type, double tol) {
@@ -618,8 +725,13 @@ int main(int argc, char** argv) {
       check << scene.name << ",mean precession rate [rad/s]," << q->mean_precession_rate() << "\n";
       check << scene.name << ",max angle quadrature vs dop853(1e-14) [rad]," << grade_numerical(*ref, IntegratorType::kDop853, 1e-14) << "\n";
       check << scene.name << ",max angle quadrature vs dop853(1e-12) [rad]," << grade_numerical(*ref, IntegratorType::kDop853, 1e-12) << "\n";
-      if (frictionless) run_scene<Frictionless>(scene, *ref, opt, rows);
-      else run_scene<FixedTip>(scene, *ref, opt, rows);
+      if (frictionless) {
+        run_scene<Frictionless>(scene, *ref, opt, rows);
+        dense_sampling<Frictionless>(scene, *ref, opt, dense_rows);
+      } else {
+        run_scene<FixedTip>(scene, *ref, opt, rows);
+        dense_sampling<FixedTip>(scene, *ref, opt, dense_rows);
+      }
     }
   }
   {
@@ -629,6 +741,13 @@ int main(int argc, char** argv) {
     for (const Row& r : rows)
       csv << r.scene << "," << r.family << "," << r.method << "," << r.parameter_name << "," << r.parameter << ","
           << r.cpu << "," << r.steps << "," << r.attitude << "," << r.energy << "," << r.normal << "\n";
+  }
+  {
+    std::ofstream csv = open_csv(opt.output_dir + "/dense_sampling.csv",
+                                 "scene,family,method,setting,cpu_seconds,samples,max_attitude_error_rad");
+    for (const DenseRow& r : dense_rows)
+      csv << r.scene << "," << r.family << "," << r.method << "," << r.setting << "," << r.cpu << "," << r.samples << ","
+          << r.attitude << "\n";
   }
   {
     std::ofstream csv = open_csv(opt.output_dir + "/long_run_energy.csv",
