@@ -12,6 +12,7 @@
 #include <type_traits>
 
 #include "spinning_top/events.hpp"
+#include "spinning_top/hot_path.hpp"
 #include "spinning_top/kinematics.hpp"
 
 namespace spinning_top {
@@ -82,10 +83,9 @@ class FixedStepDriver : public DriverBase<Model> {
       const double h = t_new - this->t_out_;
       State y_new = this->y_out_;
       method_.step(model, y_new, h);
-      normalize_attitude(y_new);
       ++this->steps_;
-      if (!all_finite(y_new)) return this->event_ = Event::kNonFinite;
-      const Eigen::Vector2d g_new = event_functions(model, y_new);
+      Eigen::Vector2d g_new;
+      if (!project_and_check(model, y_new, g_new)) return this->event_ = Event::kNonFinite;
       const Event fired = triggered_event(g_new);
       if (fired == Event::kNonFinite) return this->event_ = fired;
       if (fired != Event::kNone) {
@@ -113,6 +113,16 @@ class FixedStepDriver : public DriverBase<Model> {
   }
 
  private:
+  /// After a step: projects the attitude, then (if finite) evaluates the event functions.
+  /// Flattened (hot_path.hpp) so that this per-step work is inlined whatever the method;
+  /// the method's step itself is not (radau5's Newton iteration would be large).
+  SPINNING_TOP_FLATTEN static bool project_and_check(const Model& model, State& y, Eigen::Vector2d& g) {
+    normalize_attitude(y);
+    if (!all_finite(y)) return false;
+    g = event_functions(model, y);
+    return true;
+  }
+
   static std::string format_step(double s) {
     char buffer[32];
     std::snprintf(buffer, sizeof buffer, "%g s", s);
@@ -202,7 +212,8 @@ class AdaptiveDriver : public DriverBase<Model> {
 
   /// One accepted step (with as many rejected attempts as needed). False if the step size
   /// underflows: the solution cannot be continued with finite values.
-  bool take_step(const Model& model) {
+  /// Flattened (hot_path.hpp): the attempt, the error norm and the event functions are inlined.
+  SPINNING_TOP_FLATTEN bool take_step(const Model& model) {
     typename Method::Attempt attempt;
     for (;;) {
       if (!(dt_ > 1e-14 * std::max(1.0, std::abs(t_)))) return false;

@@ -9,6 +9,8 @@
 #include <Eigen/Core>
 #include <cmath>
 
+#include "spinning_top/hot_path.hpp"
+
 namespace spinning_top {
 
 template <class Model>
@@ -33,7 +35,7 @@ class DormandPrince853 {
     double t0 = 0.0, dt = 0.0;
   };
 
-  void attempt(const Model& model, const State& y0, const State& f0, double dt, Attempt& out) {
+  SPINNING_TOP_FLATTEN void attempt(const Model& model, const State& y0, const State& f0, double dt, Attempt& out) {
     k_[0] = f0;
     for (int s = 1; s < 12; ++s) model.derivative(stage_start(y0, dt, s), k_[s]);
     out.y1 = stage_start(y0, dt, 12);
@@ -55,8 +57,8 @@ class DormandPrince853 {
   }
 
   /// Continuous extension of the step just attempted (needs three more evaluations of f).
-  void prepare_dense(const Model& model, const State& y0, const State& f0, const Attempt& a, double t0,
-                     double dt, DenseStep& d) {
+  SPINNING_TOP_FLATTEN void prepare_dense(const Model& model, const State& y0, const State& f0, const Attempt& a,
+                                          double t0, double dt, DenseStep& d) {
     for (int s = 13; s < 16; ++s) model.derivative(stage_start(y0, dt, s), k_[s]);
     const State delta = a.y1 - y0;
     d.y0 = y0;
@@ -74,7 +76,7 @@ class DormandPrince853 {
   }
 
   /// y(t0 + x dt), seventh order: the nested form of dop853.f's CONTD8.
-  static State dense(const DenseStep& d, double t) {
+  SPINNING_TOP_FLATTEN static State dense(const DenseStep& d, double t) {
     const double x = (t - d.t0) / d.dt;
     State y = State::Zero();
     for (int i = 6; i >= 0; --i) {

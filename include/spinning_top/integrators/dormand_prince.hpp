@@ -7,6 +7,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "spinning_top/hot_path.hpp"
+
 namespace spinning_top {
 
 template <class Model>
@@ -31,7 +33,7 @@ class DormandPrince54 {
     double t0 = 0.0, dt = 0.0;
   };
 
-  void attempt(const Model& model, const State& y0, const State& f0, double dt, Attempt& out) {
+  SPINNING_TOP_FLATTEN void attempt(const Model& model, const State& y0, const State& f0, double dt, Attempt& out) {
     model.derivative(y0 + dt * (a21 * f0), k2_);
     model.derivative(y0 + dt * (a31 * f0 + a32 * k2_), k3_);
     model.derivative(y0 + dt * (a41 * f0 + a42 * k2_ + a43 * k3_), k4_);
@@ -43,7 +45,7 @@ class DormandPrince54 {
   }
 
   /// Prepares the continuous extension of the step just attempted (call after attempt()).
-  void prepare_dense(const State& y0, const State& f0, const Attempt& a, double t0, double dt, DenseStep& d) const {
+  SPINNING_TOP_FLATTEN void prepare_dense(const State& y0, const State& f0, const Attempt& a, double t0, double dt, DenseStep& d) const {
     const State ydiff = a.y1 - y0;
     const State bspl = dt * f0 - ydiff;
     d.r1 = y0;
@@ -56,7 +58,7 @@ class DormandPrince54 {
   }
 
   /// y(t0 + theta dt), fourth order, theta in [0, 1].
-  static State dense(const DenseStep& d, double t) {
+  SPINNING_TOP_FLATTEN static State dense(const DenseStep& d, double t) {
     const double theta = (t - d.t0) / d.dt, theta1 = 1.0 - theta;
     return d.r1 + theta * (d.r2 + theta1 * (d.r3 + theta * (d.r4 + theta1 * d.r5)));
   }

@@ -1,6 +1,8 @@
 // Classical fourth-order Runge-Kutta (Hairer, Norsett, Wanner, Solving ODEs I, Table II.1.2).
 #pragma once
 
+#include "spinning_top/hot_path.hpp"
+
 namespace spinning_top {
 
 /// One-step method: step() advances y by dt in place. Any Model with State and
@@ -13,7 +15,7 @@ class ClassicalRk4 {
   static constexpr int kStagesPerStep = 4;
   static constexpr const char* kName = "rk4";
 
-  void step(const Model& model, State& y, double dt) const {
+  SPINNING_TOP_FLATTEN void step(const Model& model, State& y, double dt) const {
     State k1, k2, k3, k4;
     model.derivative(y, k1);
     model.derivative(y + (0.5 * dt) * k1, k2);
