@@ -132,12 +132,13 @@ class FixedStepDriver : public DriverBase<Model> {
   Method method_;
 };
 
-/// True for embedded pairs whose dense output needs extra evaluations of f (DOP853).
+/// True for embedded pairs whose dense output needs extra evaluations of f (DOP853): the
+/// driver completes it (Method::complete_dense) only for a step where it is used.
 template <class Method, class = void>
-struct dense_output_needs_model : std::false_type {};
+struct has_lazy_dense_output : std::false_type {};
 template <class Method>
-struct dense_output_needs_model<Method, std::void_t<decltype(Method::kDenseNeedsModel)>>
-    : std::bool_constant<Method::kDenseNeedsModel> {};
+struct has_lazy_dense_output<Method, std::void_t<decltype(Method::kLazyDense)>>
+    : std::bool_constant<Method::kLazyDense> {};
 
 template <class Model, class Method>
 class AdaptiveDriver : public DriverBase<Model> {
@@ -156,7 +157,7 @@ class AdaptiveDriver : public DriverBase<Model> {
     y_ = this->y_out_;
     model.derivative(y_, f_);
     dt_ = initial_step(model);
-    has_dense_ = false;
+    has_dense_ = dense_complete_ = false;
     pending_ = Event::kNone;
     previous_error_ = 1e-4;
   }
@@ -181,7 +182,7 @@ class AdaptiveDriver : public DriverBase<Model> {
       return this->event_ = pending_;
     }
     this->t_out_ = t_target;
-    this->y_out_ = Method::dense(dense_, t_target);
+    this->y_out_ = Method::dense(dense_step(model), t_target);
     normalize_attitude(this->y_out_);
     return Event::kNone;
   }
@@ -210,6 +211,16 @@ class AdaptiveDriver : public DriverBase<Model> {
     return std::isfinite(h) && h > 0.0 ? h : 1e-6;
   }
 
+  /// The continuous extension of the last accepted step, completed on first use: with output
+  /// every 1 ms and steps of ~4 ms, or output only at the end, most steps never need it.
+  const typename Method::DenseStep& dense_step(const Model& model) {
+    if constexpr (has_lazy_dense_output<Method>::value) {
+      if (!dense_complete_) method_.complete_dense(model, dense_);
+    }
+    dense_complete_ = true;
+    return dense_;
+  }
+
   /// One accepted step (with as many rejected attempts as needed). False if the step size
   /// underflows: the solution cannot be continued with finite values.
   /// Flattened (hot_path.hpp): the attempt, the error norm and the event functions are inlined.
@@ -222,11 +233,10 @@ class AdaptiveDriver : public DriverBase<Model> {
       const double exponent = 1.0 / (Method::kEmbeddedOrder + 1);
       if (std::isfinite(err) && err <= 1.0 && all_finite(attempt.f1)) {
         const double factor = std::pow(err, exponent - 0.75 * kBeta) / std::pow(previous_error_, kBeta);
-        if constexpr (dense_output_needs_model<Method>::value)
-          method_.prepare_dense(model, y_, f_, attempt, t_, dt_, dense_);
-        else
-          method_.prepare_dense(y_, f_, attempt, t_, dt_, dense_);
+        // Lazy methods complete the dense output only if asked for in this step (dense_step()).
+        method_.prepare_dense(y_, f_, attempt, t_, dt_, dense_);
         has_dense_ = true;
+        dense_complete_ = false;
         const double t_new = t_ + dt_;
         State y_new = attempt.y1;
         normalize_attitude(y_new);
@@ -235,8 +245,9 @@ class AdaptiveDriver : public DriverBase<Model> {
         const Event fired = triggered_event(g_new);
         if (fired == Event::kNonFinite) return false;
         if (fired != Event::kNone) {
+          const typename Method::DenseStep& dense = dense_step(model);
           auto state_at = [&](double t) {
-            State y = Method::dense(dense_, t);
+            State y = Method::dense(dense, t);
             normalize_attitude(y);
             return y;
           };
@@ -265,7 +276,7 @@ class AdaptiveDriver : public DriverBase<Model> {
   double t_ = 0.0, dt_ = 0.0, previous_error_ = 1e-4;
   State y_ = State::Zero(), f_ = State::Zero();
   typename Method::DenseStep dense_;
-  bool has_dense_ = false;
+  bool has_dense_ = false, dense_complete_ = false;
   Event pending_ = Event::kNone;
 };
 

@@ -2,8 +2,9 @@
 // error estimator and 7th-order dense output (Hairer, Norsett, Wanner, Solving ODEs I, 2nd ed.
 // 1993, sec. II.10; coefficients of Hairer's dop853.f, as tabulated in SciPy's
 // integrate/_ivp/dop853_coefficients.py). 12 stages per step (the 13th, f(y1), is the next
-// step's first), 3 more for the dense output of an accepted step. For smooth non-stiff
-// problems at tight tolerances it needs far fewer steps than dopri5.
+// step's first), 3 more for the dense output of an accepted step, evaluated only for a step in
+// which dense output is actually asked for (complete_dense()). For smooth non-stiff problems at
+// tight tolerances it needs far fewer steps than dopri5.
 #pragma once
 
 #include <Eigen/Core>
@@ -20,7 +21,7 @@ class DormandPrince853 {
   static constexpr int kOrder = 8;
   static constexpr int kEmbeddedOrder = 7;  // Hairer's combined 5th/3rd-order estimate scales as dt^8
   static constexpr int kStagesPerStep = 12;
-  static constexpr bool kDenseNeedsModel = true;
+  static constexpr bool kLazyDense = true;  // dense() needs complete_dense() first
   static constexpr const char* kName = "dop853";
 
   struct Attempt {
@@ -56,23 +57,31 @@ class DormandPrince853 {
     out.error = (dt * ratio) * err5;
   }
 
-  /// Continuous extension of the step just attempted (needs three more evaluations of f).
-  SPINNING_TOP_FLATTEN void prepare_dense(const Model& model, const State& y0, const State& f0, const Attempt& a,
-                                          double t0, double dt, DenseStep& d) {
-    for (int s = 13; s < 16; ++s) model.derivative(stage_start(y0, dt, s), k_[s]);
+  /// Continuous extension of the step just accepted, first part: the cubic Hermite terms,
+  /// which need no more evaluations of f. dense() needs complete_dense() as well.
+  SPINNING_TOP_FLATTEN void prepare_dense(const State& y0, const State& f0, const Attempt& a, double t0, double dt,
+                                          DenseStep& d) const {
     const State delta = a.y1 - y0;
     d.y0 = y0;
     d.f[0] = delta;
     d.f[1] = dt * f0 - delta;
     d.f[2] = 2.0 * delta - dt * (a.f1 + f0);
+    d.t0 = t0;
+    d.dt = dt;
+  }
+
+  /// Second part: the three extra stages and the seventh-order terms. It reads the stages
+  /// k_ of the step, so it must come before the next attempt(). Split off because most
+  /// steps of a run with sparse output (or none) never need it: it costs 3 of the 15
+  /// evaluations of f and the 4 x 12 vector terms of kD.
+  SPINNING_TOP_FLATTEN void complete_dense(const Model& model, DenseStep& d) {
+    for (int s = 13; s < 16; ++s) model.derivative(stage_start(d.y0, d.dt, s), k_[s]);
     for (int i = 0; i < 4; ++i) {
       State sum = State::Zero();
       for (int j = 0; j < 16; ++j)
         if (kD[i][j] != 0.0) sum += kD[i][j] * k_[j];
-      d.f[3 + i] = dt * sum;
+      d.f[3 + i] = d.dt * sum;
     }
-    d.t0 = t0;
-    d.dt = dt;
   }
 
   /// y(t0 + x dt), seventh order: the nested form of dop853.f's CONTD8.
