@@ -156,6 +156,7 @@ class AdaptiveDriver : public DriverBase<Model> {
     t_ = t;
     y_ = this->y_out_;
     model.derivative(y_, f_);
+    g_ = event_functions(model, y_);
     dt_ = initial_step(model);
     has_dense_ = dense_complete_ = false;
     pending_ = Event::kNone;
@@ -240,7 +241,8 @@ class AdaptiveDriver : public DriverBase<Model> {
         const double t_new = t_ + dt_;
         State y_new = attempt.y1;
         normalize_attitude(y_new);
-        const Eigen::Vector2d g_old = event_functions(model, y_), g_new = event_functions(model, y_new);
+        // g_ = g(y_) is kept from the previous step (the same y_), not evaluated again.
+        const Eigen::Vector2d g_old = g_, g_new = event_functions(model, y_new);
         ++this->steps_;
         const Event fired = triggered_event(g_new);
         if (fired == Event::kNonFinite) return false;
@@ -257,6 +259,7 @@ class AdaptiveDriver : public DriverBase<Model> {
           return true;
         }
         y_ = y_new;
+        g_ = g_new;
         // FSAL: f(y1) is reused although the projection moved y1 by O(local error); the
         // mismatch enters the next step multiplied by dt, below its local error.
         f_ = attempt.f1;
@@ -275,6 +278,7 @@ class AdaptiveDriver : public DriverBase<Model> {
   Method method_;
   double t_ = 0.0, dt_ = 0.0, previous_error_ = 1e-4;
   State y_ = State::Zero(), f_ = State::Zero();
+  Eigen::Vector2d g_ = Eigen::Vector2d::Zero();  // event functions at y_
   typename Method::DenseStep dense_;
   bool has_dense_ = false, dense_complete_ = false;
   Event pending_ = Event::kNone;

@@ -37,20 +37,28 @@ class FixedTip {
     const Vector3 gamma = vertical_in_body(y);
     const double wx = y[state_index::kOmegaX], wy = y[state_index::kOmegaY];
     attitude_rate(y, Vector3(wx, wy, spin_), dydt);
-    dydt[state_index::kOmegaX] = gyroscopic_rate_ * wy + gravity_torque_per_inertia_ * gamma.y();
-    dydt[state_index::kOmegaY] = -gyroscopic_rate_ * wx - gravity_torque_per_inertia_ * gamma.x();
+    const Vector2 rates = transverse_acceleration(gamma, wx, wy);
+    dydt[state_index::kOmegaX] = rates.x();
+    dydt[state_index::kOmegaY] = rates.y();
+  }
+
+  /// (wX', wY') of Euler's equations above.
+  Vector2 transverse_acceleration(const Vector3& gamma, double wx, double wy) const {
+    return Vector2(gyroscopic_rate_ * wy + gravity_torque_per_inertia_ * gamma.y(),
+                   -gyroscopic_rate_ * wx - gravity_torque_per_inertia_ * gamma.x());
   }
 
   /// Floor force on the tip in body components: N = m (a_G + g e_z), with
   /// a_G = h (w' x e_Z + w x (w x e_Z)) = h (wY' + wZ wX, -wX' + wZ wY, -w_perp^2).
+  /// Only (wX', wY') are needed, not the whole derivative (this is an event function,
+  /// evaluated after every step).
   Vector3 pivot_force_in_body(const State& y) const {
-    State dydt;
-    derivative(y, dydt);
     const Vector3 gamma = vertical_in_body(y);
     const double wx = y[state_index::kOmegaX], wy = y[state_index::kOmegaY];
+    const Vector2 rates = transverse_acceleration(gamma, wx, wy);
     const double h = parameters_.tip_distance, m = parameters_.mass;
-    const Vector3 acceleration_of_g(h * (dydt[state_index::kOmegaY] + spin_ * wx),
-                                    h * (-dydt[state_index::kOmegaX] + spin_ * wy),
+    const Vector3 acceleration_of_g(h * (rates.y() + spin_ * wx),
+                                    h * (-rates.x() + spin_ * wy),
                                     -h * (wx * wx + wy * wy));
     return m * (acceleration_of_g + parameters_.gravity * gamma);
   }
