@@ -22,6 +22,7 @@
 #include <cmath>
 #include <limits>
 
+#include "spinning_top/hot_path.hpp"
 #include "spinning_top/kinematics.hpp"
 #include "spinning_top/scenes/fixed_tip.hpp"
 #include "spinning_top/scenes/frictionless.hpp"
@@ -100,7 +101,8 @@ class ReducedGauss6 {
 
   /// Solves the collocation equations K_i = f(u0 + dt sum_j a_ij K_j) by fixed-point
   /// iteration (the problem is not stiff: contraction ~ dt |omega| / 2 per sweep).
-  bool collocate(const Model& model, State& y, double dt) const {
+  /// Flattened (hot_path.hpp): rate() and its attitude_rate() were left as calls.
+  SPINNING_TOP_FLATTEN bool collocate(const Model& model, State& y, double dt) const {
     const TransverseLaw<Model> law(model);
     const double spin = model.spin();
     Reduced u0;
