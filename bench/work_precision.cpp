@@ -663,6 +663,13 @@ int main(int argc, char** argv) {
       return arg == "--help" ? 0 : 2;
     }
   }
+  // The long runs sample every (steps / 200): fewer than 200 steps (after --quick's tenth) would
+  // make that interval zero.
+  if (!(opt.duration > 0.0 && std::isfinite(opt.duration)) || (opt.quick ? opt.long_steps / 10 : opt.long_steps) < 200) {
+    std::cerr << "work_precision: --duration must be a finite number > 0 and --long-steps at least 200 "
+                 "(2000 with --quick)\n";
+    return 2;
+  }
   const std::vector<Scene> scenes = {
       {"fixed_tip", toy_top(SceneType::kFixedTip, 0.0)},
       {"frictionless", toy_top(SceneType::kFrictionless, 0.0)},
