@@ -6,6 +6,7 @@
 // Writes DIR/work_precision.csv, DIR/long_run_energy.csv, DIR/reference_check.csv and
 // DIR/dense_sampling.csv (the cost of a state every 1 ms, what the node asks for).
 #include <time.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <array>
@@ -267,9 +268,20 @@ std::ofstream open_csv(const std::string& path, const std::string& header) {
   return f;
 }
 
+/// One progress line on stderr: rewritten in place on a terminal, one line each in a log.
 void progress(const std::string& text) {
-  std::fprintf(stderr, "\r\033[K%s", text.c_str());
+  static const bool terminal = isatty(STDERR_FILENO) != 0;
+  if (terminal) std::fprintf(stderr, "\r\033[K%s", text.c_str());
+  else if (!text.empty() && text.back() != '\n') std::fprintf(stderr, "%s\n", text.c_str());
+  else std::fprintf(stderr, "%s", text.c_str());
   std::fflush(stderr);
+}
+
+/// A step or tolerance as %g (std::to_string prints 1e-9 as 0.000000).
+std::string number(double value) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%g", value);
+  return text;
 }
 
 const std::vector<IntegratorType> kOurIntegrators = {
@@ -333,7 +345,7 @@ void run_scene(const Scene& scene, Reference& ref, const Options& opt, std::vect
       } catch (const InvalidParameter& e) {
         continue;  // this method is not offered for this scene, or not at this step
       }
-      progress(scene.name + ": " + to_string(type) + (closed_form ? "" : (adaptive ? " tol " : " step ") + std::to_string(p)));
+      progress(scene.name + ": " + to_string(type) + (closed_form ? "" : (adaptive ? " tol " : " step ") + number(p)));
       const double cpu = median_cpu([&] {
         sim->reset();
         sim->advance_to(duration);
@@ -377,7 +389,7 @@ void run_scene(const Scene& scene, Reference& ref, const Options& opt, std::vect
   };
   // runge_kutta4, fixed steps.
   for (const double dt : fixed_steps(opt.quick)) {
-    progress(scene.name + ": odeint rk4 step " + std::to_string(dt));
+    progress(scene.name + ": odeint rk4 step " + number(dt));
     const long n = std::lround(duration / dt);
     odeint::runge_kutta4<Array> stepper;
     Array x;
@@ -400,7 +412,7 @@ void run_scene(const Scene& scene, Reference& ref, const Options& opt, std::vect
   // Controlled steppers: errors sampled at every accepted step.
   auto controlled = [&](const std::string& name, auto make_stepper) {
     for (const double tol : tolerances(opt.quick)) {
-      progress(scene.name + ": odeint " + name + " tol " + std::to_string(tol));
+      progress(scene.name + ": odeint " + name + " tol " + number(tol));
       Array x;
       const double cpu = median_cpu([&] {
         x = x0;
@@ -434,7 +446,7 @@ void run_scene(const Scene& scene, Reference& ref, const Options& opt, std::vect
     for (int i = 0; i < Model::kStateSize; ++i) ux0[i] = x0[i];
     for (const double tol : tolerances(opt.quick)) {
       if (tol < 1e-11) break;  // the finite-difference Jacobian limits what it can reach
-      progress(scene.name + ": odeint rosenbrock4 tol " + std::to_string(tol));
+      progress(scene.name + ": odeint rosenbrock4 tol " + number(tol));
       typename USys::Vec x;
       auto system = std::make_pair(UblasRhs<Model>{&usys}, UblasJacobian<Model>{&usys});
       const double cpu = median_cpu([&] {
@@ -581,7 +593,7 @@ void long_runs(const Scene& scene, const Options& opt, std::ofstream& csv) {
     std::replace(name.begin(), name.end(), ',', ';');  // a CSV field
     for (long i = 1; i <= samples; ++i) {
       const double t = horizon * i / samples;
-      if (i % 20 == 1) progress(scene.name + ": long run " + to_string(type) + " t " + std::to_string(t));
+      if (i % 20 == 1) progress(scene.name + ": long run " + to_string(type) + " t " + number(t));
       if (sim->advance_to(t) != Event::kNone) break;
       const Snapshot s = sim->snapshot();
       write("ours", name, setting, t, (s.outputs.energy + s.outputs.dissipated_energy - e0) / mgh);
