@@ -136,6 +136,23 @@ inline double integrate(const std::function<double(double)>& f, double a, double
   return simpson_step(f, a, b, fa, fm, fb, (b - a) / 6.0 * (fa + 4.0 * fm + fb), tolerance, 50);
 }
 
+/// A run to its first event (or the horizon): which event, when, and the last state.
+struct EventRun {
+  Event event = Event::kNone;
+  double time = 0.0;
+  Snapshot last;
+};
+
+inline EventRun run_until_event(const SceneConfig& config, double duration) {
+  auto sim = make_simulator(config);
+  EventRun run;
+  run.event = sim->advance_to(duration);
+  run.time = sim->time();
+  run.last = sim->snapshot();
+  EXPECT_EQ(sim->event(), run.event);
+  return run;
+}
+
 /// The spinless top falls in a vertical plane: with c = m g h / A' (A' = A0 fixed tip, A
 /// frictionless) and alpha = m h^2 / A for the sliding tip (0 for the fixed one), energy gives
 ///   thetadot^2 (1 + alpha sin^2 theta) = thetadot0^2 + 2 c (cos theta0 - cos theta)

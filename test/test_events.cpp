@@ -12,22 +12,6 @@ namespace spinning_top {
 namespace {
 using namespace core_test;
 
-struct EventRun {
-  Event event = Event::kNone;
-  double time = 0.0;
-  Snapshot last;
-};
-
-EventRun run_until_event(const SceneConfig& config, double duration) {
-  auto sim = make_simulator(config);
-  EventRun run;
-  run.event = sim->advance_to(duration);
-  run.time = sim->time();
-  run.last = sim->snapshot();
-  EXPECT_EQ(sim->event(), run.event);
-  return run;
-}
-
 InitialConditions spinless(double tilt, double nutation_rate) {
   InitialConditions ic;
   ic.tilt = tilt;

@@ -161,21 +161,6 @@ TEST(ExactInvariants, EnergyVerticalMomentumAndSpinAreConservedToRoundOff) {
 // ---------------------------------------------------------------------------------------------
 // Events.
 
-struct EventRun {
-  Event event = Event::kNone;
-  double time = 0.0;
-  Snapshot last;
-};
-EventRun run_until_event(const SceneConfig& config, double duration) {
-  auto sim = make_simulator(config);
-  EventRun run;
-  run.event = sim->advance_to(duration);
-  run.time = sim->time();
-  run.last = sim->snapshot();
-  EXPECT_EQ(sim->event(), run.event);
-  return run;
-}
-
 void expect_spinless_fall_at_quadrature_time(const std::string& scene) {
   SceneConfig c = config_file(scene);
   c.initial.spin = 0.0;
