@@ -1,5 +1,5 @@
 // Shared by the test_core gtests: configurations of the toy top, geometry read off a
-// Snapshot, and the closed forms of ../shared/spec/PHYSICS.md ("Invariants and balances")
+// Snapshot, and the closed forms of doc/spec/PHYSICS.md ("Invariants and balances")
 // that the tests compare against: the steady-precession quadratic, the turning-point cubic
 // in u = cos(theta), and one-dimensional quadratures.
 #pragma once

@@ -1,7 +1,7 @@
 // Shared by test/test_extreme_cases.cpp (assertions, short runs) and bench/extreme_cases.cpp
 // (the table, long runs): loading a scene file the way the batch simulator does, running it at
 // the node's output rate, and the closed forms the stiff and extreme cases are checked against
-// (issue 4, "Stiff and extreme cases"; ../shared/spec/PHYSICS.md, "Invariants and balances").
+// (issue 4, "Stiff and extreme cases"; doc/spec/PHYSICS.md, "Invariants and balances").
 #pragma once
 
 #include <yaml-cpp/yaml.h>

@@ -1,5 +1,5 @@
 // Physical parameters and initial conditions of a symmetric top, with validation.
-// Units are SI (REP-103). Symbols follow ../shared/spec/PHYSICS.md.
+// Units are SI (REP-103). Symbols follow doc/spec/PHYSICS.md.
 #pragma once
 
 #include <stdexcept>
