@@ -284,6 +284,16 @@ std::string number(double value) {
   return text;
 }
 
+/// The simulator for c, or null where the core refuses it (a method not offered for this
+/// scene, or a step beyond its limit): the sweeps skip those points.
+std::unique_ptr<Simulator> simulator_or_null(const SceneConfig& c) {
+  try {
+    return make_simulator(c);
+  } catch (const InvalidParameter&) {
+    return nullptr;
+  }
+}
+
 const std::vector<IntegratorType> kOurIntegrators = {
     IntegratorType::kRk4,        IntegratorType::kDopri5,      IntegratorType::kDop853,
     IntegratorType::kSplitting4, IntegratorType::kSplitting6,  IntegratorType::kSplitting8,
@@ -334,17 +344,14 @@ void run_scene(const Scene& scene, Reference& ref, const Options& opt, std::vect
         closed_form ? std::vector<double>{0.0} : adaptive ? tolerances(opt.quick) : fixed_steps(opt.quick);
     for (const double p : params) {
       if (closed_form) {
+        // no step or tolerance: a single point
       } else if (adaptive) {
         c.integrator.tolerance = p;
       } else {
         c.integrator.step = p;
       }
-      std::unique_ptr<Simulator> sim;
-      try {
-        sim = make_simulator(c);
-      } catch (const InvalidParameter& e) {
-        continue;  // this method is not offered for this scene, or not at this step
-      }
+      const std::unique_ptr<Simulator> sim = simulator_or_null(c);
+      if (!sim) continue;  // this method is not offered for this scene, or not at this step
       progress(scene.name + ": " + to_string(type) + (closed_form ? "" : (adaptive ? " tol " : " step ") + number(p)));
       const double cpu = median_cpu([&] {
         sim->reset();
@@ -496,12 +503,8 @@ void dense_sampling(const Scene& scene, Reference& ref, const Options& opt, std:
     SceneConfig c = base;
     c.integrator.type = o.type;
     c.integrator.tolerance = tolerance;
-    std::unique_ptr<Simulator> sim;
-    try {
-      sim = make_simulator(c);
-    } catch (const InvalidParameter&) {
-      continue;
-    }
+    const std::unique_ptr<Simulator> sim = simulator_or_null(c);
+    if (!sim) continue;  // this method is not offered for this scene, or not at this step
     progress(scene.name + ": dense sampling " + to_string(o.type));
     const double cpu = median_cpu([&] {
       sim->reset();
@@ -579,12 +582,8 @@ void long_runs(const Scene& scene, const Options& opt, std::ofstream& csv) {
     c.integrator.type = type;
     c.integrator.step = step;
     c.integrator.tolerance = tol;
-    std::unique_ptr<Simulator> sim;
-    try {
-      sim = make_simulator(c);
-    } catch (const InvalidParameter&) {
-      continue;
-    }
+    const std::unique_ptr<Simulator> sim = simulator_or_null(c);
+    if (!sim) continue;  // this method is not offered for this scene, or not at this step
     const std::string setting = type == IntegratorType::kAuto    ? "defaults"
                                 : type == IntegratorType::kExact ? "closed form"
                                 : is_adaptive(c, type)           ? "tolerance 1e-10"
