@@ -44,6 +44,17 @@ Eigen::Vector3d translation_of(const geometry_msgs::TransformStamped& t) {
   return Eigen::Vector3d(t.transform.translation.x, t.transform.translation.y, t.transform.translation.z);
 }
 
+/// The symmetry axis of a fixed-tip top's body transform, after checking what holds in every
+/// tick: a unit quaternion (the core projects |q| = 1 after every step: a few ulps) and G = h e_Z
+/// (both come from the same state: equal to round-off times h, 1e-15 m; allow 1e-12 m).
+Eigen::Vector3d axis_of_fixed_tip_top(const geometry_msgs::TransformStamped& t, double h) {
+  const Eigen::Quaterniond q = rotation_of(t);
+  EXPECT_NEAR(q.norm(), 1.0, 1e-12);
+  const Eigen::Vector3d axis = q.normalized() * Eigen::Vector3d::UnitZ();
+  EXPECT_NEAR((translation_of(t) - h * axis).norm(), 0.0, 1e-12);
+  return axis;
+}
+
 /// Sets one double of /spinning_top through dynamic_reconfigure; returns the value the
 /// node reports back as its configuration.
 double reconfigure(const std::string& name, double value) {
@@ -69,15 +80,9 @@ TEST(Node, TransformPutsCentreOfMassAtTipDistanceAlongTheAxis) {
   for (int sample = 0; sample < 20; ++sample) {
     geometry_msgs::TransformStamped t;
     ASSERT_NO_THROW(t = tf_buffer->lookupTransform("world", "top", ros::Time(0), ros::Duration(5.0)));
-    const Eigen::Quaterniond q = rotation_of(t);
-    // The core keeps |q| = 1 to round-off (projection after every step); a few ulps.
-    EXPECT_NEAR(q.norm(), 1.0, 1e-12);
-    const Eigen::Vector3d axis = q.normalized() * Eigen::Vector3d::UnitZ();
-    const Eigen::Vector3d g = translation_of(t);
-    // Both come from the same state: equal to round-off times h (1e-15 m), allow 1e-12 m.
-    EXPECT_NEAR(g.z(), h * axis.z(), 1e-12);
-    EXPECT_NEAR((g - h * axis).norm(), 0.0, 1e-12);
-    EXPECT_GT(g.z(), 0.0);
+    const Eigen::Vector3d axis = axis_of_fixed_tip_top(t, h);
+    EXPECT_NEAR(translation_of(t).z(), h * axis.z(), 1e-12);
+    EXPECT_GT(translation_of(t).z(), 0.0);
     // The contact frame sits at the tip, which is the pivot at the origin.
     const auto contact = tf_buffer->lookupTransform("world", "contact", t.header.stamp, ros::Duration(1.0));
     EXPECT_NEAR(translation_of(contact).norm(), 0.0, 1e-12);
@@ -121,10 +126,7 @@ TEST(Node, ExactIntegratorNutatesBetweenTheRootsOfTheCubic) {
   for (int sample = 0; sample < 150; ++sample) {
     geometry_msgs::TransformStamped t;
     ASSERT_NO_THROW(t = tf_buffer->lookupTransform("world", "exact_top", ros::Time(0), ros::Duration(5.0)));
-    const Eigen::Quaterniond q = rotation_of(t);
-    EXPECT_NEAR(q.norm(), 1.0, 1e-12);
-    const Eigen::Vector3d axis = q.normalized() * Eigen::Vector3d::UnitZ();
-    EXPECT_NEAR((translation_of(t) - h * axis).norm(), 0.0, 1e-12);
+    const Eigen::Vector3d axis = axis_of_fixed_tip_top(t, h);
     const double theta = std::acos(std::min(1.0, axis.z()));
     // exact is at 1e-13 rad (test_exact); the band is checked to 1e-9 rad of its 1.2e-2 width.
     EXPECT_GE(theta, theta0 - 1e-9);
