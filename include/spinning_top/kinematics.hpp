@@ -56,6 +56,15 @@ void normalize_attitude(State& y) {
   for (int i = 0; i < 4; ++i) y[i] /= norm;
 }
 
+/// exp of a rotation vector (angle |v| about v / |v|) as a unit quaternion.
+inline Quaternion rotation_by_vector(const Vector3& v) {
+  const double angle = v.norm();
+  const double half = 0.5 * angle;
+  // sin(half)/angle -> 1/2 as angle -> 0 (series to keep full precision near zero).
+  const double s = angle > 1e-4 ? std::sin(half) / angle : 0.5 - angle * angle / 48.0;
+  return Quaternion(std::cos(half), s * v.x(), s * v.y(), s * v.z());
+}
+
 /// q0 = Rz(heading) Rx(tilt) Rz(spin_angle), body -> world (PHYSICS.md, initial state).
 inline Quaternion initial_attitude(const InitialConditions& ic) {
   return Quaternion(Eigen::AngleAxisd(ic.heading, Vector3::UnitZ())) *

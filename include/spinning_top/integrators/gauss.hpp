@@ -1,7 +1,8 @@
 // Geometric integrator for the frictionless top (and, for comparison, the fixed tip):
 // Gauss-Legendre collocation of order 6 (3 stages) on the reduced variables
 //   u = (q, Gamma, omega_X, omega_Y),  q' = q (0, omega) / 2,  Gamma' = Gamma x omega,
-//   omega_perp' = the scene's law, which depends on the attitude only through Gamma,
+//   omega_perp' = the scene's law (Model::transverse_acceleration), which depends on the
+//   attitude only through Gamma,
 // followed by the smallest body rotation of q that makes its vertical R(q)^T e_z equal the
 // collocation's Gamma (an O(dt^7) correction).
 // Why: the frictionless kinetic energy has the attitude-dependent term 1/2 m v_Gz^2, so the
@@ -24,44 +25,8 @@
 
 #include "spinning_top/hot_path.hpp"
 #include "spinning_top/kinematics.hpp"
-#include "spinning_top/scenes/fixed_tip.hpp"
-#include "spinning_top/scenes/frictionless.hpp"
-#include "spinning_top/scenes/sliding_contact.hpp"
 
 namespace spinning_top {
-
-/// omega_perp' as a function of (Gamma, omega_perp) for the scenes that have such a law.
-template <class Model>
-class TransverseLaw;
-
-template <>
-class TransverseLaw<Frictionless> {
- public:
-  explicit TransverseLaw(const Frictionless& model) : contact_(model.parameters(), model.spin()) {}
-  Vector2 operator()(const Vector3& gamma, double wx, double wy) const {
-    return contact_.solve(gamma, wx, wy).transverse_acceleration;
-  }
-
- private:
-  SlidingContact contact_;
-};
-
-template <>
-class TransverseLaw<FixedTip> {
- public:
-  explicit TransverseLaw(const FixedTip& model) {
-    const TopParameters& p = model.parameters();
-    const double a0 = p.inertia_about_tip();
-    gyroscopic_rate_ = (a0 - p.inertia_axial) * model.spin() / a0;
-    gravity_ = p.mass * p.gravity * p.tip_distance / a0;
-  }
-  Vector2 operator()(const Vector3& gamma, double wx, double wy) const {
-    return Vector2(gyroscopic_rate_ * wy + gravity_ * gamma.y(), -gyroscopic_rate_ * wx - gravity_ * gamma.x());
-  }
-
- private:
-  double gyroscopic_rate_ = 0.0, gravity_ = 0.0;
-};
 
 template <class Model>
 class ReducedGauss6 {
@@ -89,13 +54,13 @@ class ReducedGauss6 {
     step_recursive(model, y, 0.5 * dt, depth + 1);
   }
 
-  static Reduced rate(const TransverseLaw<Model>& law, double spin, const Reduced& u) {
+  static Reduced rate(const Model& model, double spin, const Reduced& u) {
     const Vector3 omega(u[7], u[8], spin);
     const Vector3 gamma = u.template segment<3>(4);
     Reduced du;
     attitude_rate(u, omega, du);  // reads u[0..3] = q, writes du[0..3]
     du.template segment<3>(4) = gamma.cross(omega);
-    du.template segment<2>(7) = law(gamma, u[7], u[8]);
+    du.template segment<2>(7) = model.transverse_acceleration(gamma, u[7], u[8]);
     return du;
   }
 
@@ -103,7 +68,6 @@ class ReducedGauss6 {
   /// iteration (the problem is not stiff: contraction ~ dt |omega| / 2 per sweep).
   /// Flattened (hot_path.hpp): rate() and its attitude_rate() were left as calls.
   SPINNING_TOP_FLATTEN bool collocate(const Model& model, State& y, double dt) const {
-    const TransverseLaw<Model> law(model);
     const double spin = model.spin();
     Reduced u0;
     u0.template head<4>() = y.template head<4>();
@@ -111,7 +75,7 @@ class ReducedGauss6 {
     u0[7] = y[state_index::kOmegaX];
     u0[8] = y[state_index::kOmegaY];
     Reduced k[kStages];
-    const Reduced f0 = rate(law, spin, u0);
+    const Reduced f0 = rate(model, spin, u0);
     for (auto& ki : k) ki = f0;
     const double scale = 1.0 + u0.cwiseAbs().maxCoeff();
     bool converged = false;
@@ -120,7 +84,7 @@ class ReducedGauss6 {
       for (int i = 0; i < kStages; ++i) {
         Reduced stage = u0;
         for (int j = 0; j < kStages; ++j) stage += (dt * kA[i][j]) * k[j];
-        const Reduced updated = rate(law, spin, stage);
+        const Reduced updated = rate(model, spin, stage);
         change = std::max(change, dt * (updated - k[i]).cwiseAbs().maxCoeff());
         k[i] = updated;
       }

@@ -1,7 +1,8 @@
 // Geometric integrator for the fixed-tip top: splitting of the Hamiltonian about the pivot
 //   H = T + V,  T = (L_X^2 + L_Y^2) / (2 A0) + L_Z^2 / (2 C)  (free symmetric top),
 //               V = m g h e_Zz                                  (gravity),
-// where each part is integrated exactly, composed into a symmetric scheme of order 4, 6 or 8.
+// where each part is integrated exactly (the scene's own flows, FixedTip::free_rotation and
+// FixedTip::gravity_kick), composed into a symmetric scheme of order 4, 6 or 8.
 // Both flows are Poisson maps of the heavy top's Lie-Poisson structure, so every composition
 // is a Lie-Poisson integrator: it conserves omega_Z and the vertical angular momentum L_z
 // exactly (each flow does) and, being symmetric, has a modified Hamiltonian that is
@@ -12,75 +13,11 @@
 // symmetric top the free flow is exact in closed form.
 #pragma once
 
-#include <cmath>
 #include <type_traits>
 
-#include "spinning_top/kinematics.hpp"
 #include "spinning_top/scenes/fixed_tip.hpp"
 
 namespace spinning_top {
-
-/// The two exact flows of the fixed tip, acting on y = (q, omega_X, omega_Y).
-class FixedTipFlows {
- public:
-  explicit FixedTipFlows(const FixedTip& model) {
-    const TopParameters& p = model.parameters();
-    const double a0 = p.inertia_about_tip();
-    inverse_a0_ = 1.0 / a0;
-    axial_momentum_ = p.inertia_axial * model.spin();
-    // Rate at which L turns about the body axis: (1/C - 1/A0) L_Z = (A0 - C) omega_Z / A0.
-    body_precession_rate_ = (a0 - p.inertia_axial) * model.spin() / a0;
-    gravity_torque_per_inertia_ = p.mass * p.gravity * p.tip_distance / a0;
-    a0_ = a0;
-  }
-
-  /// Free symmetric top for a time tau (the flow of T). L is fixed in the world; the body
-  /// turns about it at |L|/A0 and about its own axis at (1/C - 1/A0) L_Z:
-  ///   q(tau) = exp(tau L_world / A0) q(0) exp(tau nu e_Z),  nu = (1/C - 1/A0) L_Z,
-  /// and L in the body turns by -nu tau about Z: omega_perp rotates by the same angle.
-  template <class State>
-  void free_rotation(double tau, State& y) const {
-    const Quaternion q = attitude_of(y);
-    const double wx = y[state_index::kOmegaX], wy = y[state_index::kOmegaY];
-    const Vector3 momentum_world = q * Vector3(a0_ * wx, a0_ * wy, axial_momentum_);
-    const Quaternion world_turn = rotation_by_vector(tau * inverse_a0_ * momentum_world);
-    const double half_body_angle = 0.5 * tau * body_precession_rate_;
-    const double ch = std::cos(half_body_angle), sh = std::sin(half_body_angle);
-    const Quaternion q1 = world_turn * q * Quaternion(ch, 0.0, 0.0, sh);
-    y[state_index::kQw] = q1.w();
-    y[state_index::kQx] = q1.x();
-    y[state_index::kQy] = q1.y();
-    y[state_index::kQz] = q1.z();
-    // cos and sin of the full angle by the double-angle formulas (two fewer calls).
-    const double c = 1.0 - 2.0 * sh * sh, s = 2.0 * sh * ch;
-    y[state_index::kOmegaX] = c * wx + s * wy;
-    y[state_index::kOmegaY] = -s * wx + c * wy;
-  }
-
-  /// Gravity for a time tau at fixed attitude (the flow of V): the torque about the pivot
-  /// m g h (e_zY, -e_zX, 0) is constant, so the body rates change linearly. The kick is
-  /// horizontal (orthogonal to e_z), so L_z does not change; it has no Z part, so omega_Z
-  /// does not either.
-  template <class State>
-  void gravity_kick(double tau, State& y) const {
-    const Vector3 gamma = vertical_in_body(y);
-    y[state_index::kOmegaX] += tau * gravity_torque_per_inertia_ * gamma.y();
-    y[state_index::kOmegaY] -= tau * gravity_torque_per_inertia_ * gamma.x();
-  }
-
- private:
-  /// exp of a rotation vector (angle |v| about v / |v|) as a unit quaternion.
-  static Quaternion rotation_by_vector(const Vector3& v) {
-    const double angle = v.norm();
-    const double half = 0.5 * angle;
-    // sin(half)/angle -> 1/2 as angle -> 0 (series to keep full precision near zero).
-    const double s = angle > 1e-4 ? std::sin(half) / angle : 0.5 - angle * angle / 48.0;
-    return Quaternion(std::cos(half), s * v.x(), s * v.y(), s * v.z());
-  }
-
-  double a0_ = 1.0, inverse_a0_ = 1.0, axial_momentum_ = 0.0, body_precession_rate_ = 0.0,
-         gravity_torque_per_inertia_ = 0.0;
-};
 
 // Splitting schemes: kick(b_0) rotate(a_0) kick(b_1) ... rotate(a_{s-1}) kick(b_s), symmetric
 // (a and b palindromic), sum a = sum b = 1.
@@ -154,21 +91,20 @@ class Splitting<FixedTip, Scheme> {
   static constexpr const char* kName = Scheme::kName;
 
   void step(const FixedTip& model, State& y, double dt) const {
-    const FixedTipFlows flows(model);
     if constexpr (detail::IsStrangComposition<Scheme>::value) {
       double pending_kick = 0.5 * Scheme::gamma[0];
       for (int i = 0; i < Scheme::kStrangSteps; ++i) {
-        flows.gravity_kick(pending_kick * dt, y);
-        flows.free_rotation(Scheme::gamma[i] * dt, y);
+        model.gravity_kick(pending_kick * dt, y);
+        model.free_rotation(Scheme::gamma[i] * dt, y);
         pending_kick = 0.5 * (Scheme::gamma[i] + (i + 1 < Scheme::kStrangSteps ? Scheme::gamma[i + 1] : 0.0));
       }
-      flows.gravity_kick(pending_kick * dt, y);
+      model.gravity_kick(pending_kick * dt, y);
     } else {
       for (int i = 0; i < Scheme::kRotations; ++i) {
-        flows.gravity_kick(Scheme::kick[i] * dt, y);
-        flows.free_rotation(Scheme::rotate[i] * dt, y);
+        model.gravity_kick(Scheme::kick[i] * dt, y);
+        model.free_rotation(Scheme::rotate[i] * dt, y);
       }
-      flows.gravity_kick(Scheme::kick[Scheme::kRotations] * dt, y);
+      model.gravity_kick(Scheme::kick[Scheme::kRotations] * dt, y);
     }
   }
 };

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <cmath>
 
 #include "spinning_top/kinematics.hpp"
 #include "spinning_top/model_outputs.hpp"
@@ -21,6 +22,9 @@ class FixedTip {
   FixedTip(const TopParameters& parameters, const InitialConditions& initial)
       : parameters_(parameters), initial_(initial), spin_(initial.spin) {
     const double a0 = parameters.inertia_about_tip();
+    a0_ = a0;
+    inverse_a0_ = 1.0 / a0;
+    axial_momentum_ = parameters.inertia_axial * spin_;
     gyroscopic_rate_ = (a0 - parameters.inertia_axial) * spin_ / a0;
     gravity_torque_per_inertia_ = parameters.mass * parameters.gravity * parameters.tip_distance / a0;
   }
@@ -46,6 +50,43 @@ class FixedTip {
   Vector2 transverse_acceleration(const Vector3& gamma, double wx, double wy) const {
     return Vector2(gyroscopic_rate_ * wy + gravity_torque_per_inertia_ * gamma.y(),
                    -gyroscopic_rate_ * wx - gravity_torque_per_inertia_ * gamma.x());
+  }
+
+  // The exact flows of the two parts of the energy about the pivot, H = T + V with
+  //   T = (L_X^2 + L_Y^2) / (2 A0) + L_Z^2 / (2 C)  (free symmetric top),  V = m g h e_Zz,
+  // which the splitting integrators compose (integrators/splitting.hpp). Their sum of vector
+  // fields is Euler's equations above.
+
+  /// Free symmetric top for a time tau (the flow of T). L is fixed in the world; the body
+  /// turns about it at |L|/A0 and about its own axis at (1/C - 1/A0) L_Z = (A0 - C) wZ / A0:
+  ///   q(tau) = exp(tau L_world / A0) q(0) exp(tau nu e_Z),  nu = (A0 - C) wZ / A0,
+  /// and L in the body turns by -nu tau about Z: omega_perp rotates by the same angle.
+  void free_rotation(double tau, State& y) const {
+    const Quaternion q = attitude_of(y);
+    const double wx = y[state_index::kOmegaX], wy = y[state_index::kOmegaY];
+    const Vector3 momentum_world = q * Vector3(a0_ * wx, a0_ * wy, axial_momentum_);
+    const Quaternion world_turn = rotation_by_vector(tau * inverse_a0_ * momentum_world);
+    const double half_body_angle = 0.5 * tau * gyroscopic_rate_;
+    const double ch = std::cos(half_body_angle), sh = std::sin(half_body_angle);
+    const Quaternion q1 = world_turn * q * Quaternion(ch, 0.0, 0.0, sh);
+    y[state_index::kQw] = q1.w();
+    y[state_index::kQx] = q1.x();
+    y[state_index::kQy] = q1.y();
+    y[state_index::kQz] = q1.z();
+    // cos and sin of the full angle by the double-angle formulas (two fewer calls).
+    const double c = 1.0 - 2.0 * sh * sh, s = 2.0 * sh * ch;
+    y[state_index::kOmegaX] = c * wx + s * wy;
+    y[state_index::kOmegaY] = -s * wx + c * wy;
+  }
+
+  /// Gravity for a time tau at fixed attitude (the flow of V): the torque about the pivot
+  /// m g h (e_zY, -e_zX, 0) is constant, so the body rates change linearly (the gravity terms
+  /// of transverse_acceleration). The kick is horizontal (orthogonal to e_z), so L_z does not
+  /// change; it has no Z part, so omega_Z does not either.
+  void gravity_kick(double tau, State& y) const {
+    const Vector3 gamma = vertical_in_body(y);
+    y[state_index::kOmegaX] += tau * gravity_torque_per_inertia_ * gamma.y();
+    y[state_index::kOmegaY] -= tau * gravity_torque_per_inertia_ * gamma.x();
   }
 
   /// Floor force on the tip in body components: N = m (a_G + g e_z), with
@@ -95,6 +136,8 @@ class FixedTip {
   TopParameters parameters_;
   InitialConditions initial_;
   double spin_;
+  double a0_, inverse_a0_;             // A0 = A + m h^2 and 1 / A0
+  double axial_momentum_;              // L_Z = C wZ
   double gyroscopic_rate_;             // (A0 - C) wZ / A0
   double gravity_torque_per_inertia_;  // m g h / A0
 };

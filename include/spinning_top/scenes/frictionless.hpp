@@ -38,10 +38,16 @@ class Frictionless {
   /// solved in closed form by SlidingContact with no friction.
   void derivative(const State& y, State& dydt) const {
     const double wx = y[state_index::kOmegaX], wy = y[state_index::kOmegaY];
-    const SlidingContact::Result r = contact_.solve(vertical_in_body(y), wx, wy);
+    const Vector2 rates = transverse_acceleration(vertical_in_body(y), wx, wy);
     attitude_rate(y, Vector3(wx, wy, spin_), dydt);
-    dydt[state_index::kOmegaX] = r.transverse_acceleration.x();
-    dydt[state_index::kOmegaY] = r.transverse_acceleration.y();
+    dydt[state_index::kOmegaX] = rates.x();
+    dydt[state_index::kOmegaY] = rates.y();
+  }
+
+  /// (wX', wY') above: a function of the vertical Gamma and omega_perp only (the reduced
+  /// variables of integrators/gauss.hpp).
+  Vector2 transverse_acceleration(const Vector3& gamma, double wx, double wy) const {
+    return contact_.solve(gamma, wx, wy).transverse_acceleration;
   }
 
   double normal_force(const State& y) const {
