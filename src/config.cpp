@@ -3,7 +3,23 @@
 #include <cerrno>
 #include <cstdlib>
 
+#include "spinning_top/integrator_registry.hpp"
+
 namespace spinning_top {
+
+namespace {
+
+/// The integrator key's help: the registry's names (what each one is: integrator_registry()).
+const std::string& integrator_key_description() {
+  static const std::string text = [] {
+    std::string names;
+    for (const IntegratorInfo& row : integrator_registry()) names += (names.empty() ? "" : " | ") + std::string(row.name);
+    return names + " (scenes and kinds: the integrator table)";
+  }();
+  return text;
+}
+
+}  // namespace
 
 const std::vector<ParameterSpec>& parameter_specs() {
   static const std::vector<ParameterSpec> specs = {
@@ -22,13 +38,7 @@ const std::vector<ParameterSpec>& parameter_specs() {
       {"initial/spin_angle", "rad", "0", false, "psi0, initial spin angle"},
       {"initial/velocity_x", "m/s", "0", false, "initial horizontal velocity of G, x (viscous scene only)"},
       {"initial/velocity_y", "m/s", "0", false, "initial horizontal velocity of G, y (viscous scene only)"},
-      {"integrator", "", "auto", false,
-       "auto (splitting6 for fixed_tip, gauss6 for frictionless, radau5 for viscous when the friction time m/(k (1 + m h^2/A)) is "
-       "shorter than step, dop853 otherwise) | rk4 (fixed step) | dopri5 (adaptive, dense output) | dop853 (adaptive, order 8) | "
-       "splitting4 | splitting6 | splitting8 (fixed_tip only: geometric, exact omega_Z and L_z, bounded "
-       "energy error) | gauss6 (fixed_tip, frictionless: geometric, same invariants) | radau5 (Radau IIA, L-stable, fixed step: stiff friction) | rodas4 (Rosenbrock, "
-       "fixed step: moderately stiff friction) | exact (fixed_tip, frictionless: closed-form solution by quadrature, "
-       "no step; refuses a few degenerate states, see doc/integrators.md)"},
+      {"integrator", "", "auto", false, integrator_key_description().c_str()},
       {"step", "s", "0.001", false,
        "largest substep of the fixed-step integrators; refused beyond 2 / (rate of the fastest motion), "
        "auto shortens it to half that instead"},

@@ -30,6 +30,7 @@
 #include <vector>
 
 #include "spinning_top/config.hpp"
+#include "spinning_top/integrator_registry.hpp"
 #include "spinning_top/simulator.hpp"
 
 namespace spinning_top {
@@ -103,6 +104,26 @@ void print_help(std::ostream& out) {
     pad(spec.default_value, default_width);
     pad(spec.required_in_file ? "yes" : "no", 8);
     out << spec.description << "\n";
+  }
+  out << "\n"
+         "Integrators (values of the integrator key; doc/integrators.md):\n";
+  std::size_t name_width = 4, scenes_width = 6, kind_width = 4;
+  for (const IntegratorInfo& row : integrator_registry()) {
+    name_width = std::max(name_width, std::strlen(row.name));
+    scenes_width = std::max(scenes_width, row.scene_names().size());
+    kind_width = std::max(kind_width, std::strlen(to_string(row.kind)));
+  }
+  out << "  ";
+  pad("name", name_width);
+  pad("scenes", scenes_width);
+  pad("kind", kind_width);
+  out << "description\n";
+  for (const IntegratorInfo& row : integrator_registry()) {
+    out << "  ";
+    pad(row.name, name_width);
+    pad(row.scene_names(), scenes_width);
+    pad(to_string(row.kind), kind_width);
+    out << row.help << "\n";
   }
   out << "\n"
          "Output: the CSV header\n"

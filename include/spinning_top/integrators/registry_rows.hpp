@@ -1,0 +1,214 @@
+// The integrator registry's rows: one specialisation of Integrator<type> per integrator, the one
+// place that gives its name, the scenes it serves, its step limit, its help line and the driver
+// that runs it. Its kind (fixed step, adaptive, closed form) is read off the driver, so changing
+// a driver (e.g. radau5 from FixedStepDriver to AdaptiveDriver) changes how the core builds it,
+// validates its step and documents it, in one line.
+// Read by src/integrator_registry.cpp (the run-time view, integrator_registry.hpp) and by the
+// scene factories (src/scenes/*_simulator.cpp), which instantiate the drivers of their scene.
+#pragma once
+
+#include <type_traits>
+
+#include "spinning_top/drivers.hpp"
+#include "spinning_top/integrator_registry.hpp"
+#include "spinning_top/integrators/dop853.hpp"
+#include "spinning_top/integrators/dormand_prince.hpp"
+#include "spinning_top/integrators/exact.hpp"
+#include "spinning_top/integrators/gauss.hpp"
+#include "spinning_top/integrators/radau.hpp"
+#include "spinning_top/integrators/rk4.hpp"
+#include "spinning_top/integrators/rosenbrock.hpp"
+#include "spinning_top/integrators/splitting.hpp"
+#include "spinning_top/scenes/fixed_tip.hpp"
+#include "spinning_top/scenes/frictionless.hpp"
+#include "spinning_top/scenes/viscous.hpp"
+
+namespace spinning_top {
+
+/// The scene a model type simulates.
+template <class Model>
+struct SceneOf;
+template <>
+struct SceneOf<FixedTip> : std::integral_constant<SceneType, SceneType::kFixedTip> {};
+template <>
+struct SceneOf<Frictionless> : std::integral_constant<SceneType, SceneType::kFrictionless> {};
+template <>
+struct SceneOf<Viscous> : std::integral_constant<SceneType, SceneType::kViscous> {};
+
+constexpr unsigned kFixedTipOnly = scene_bit(SceneType::kFixedTip);
+constexpr unsigned kIntegrableScenes = scene_bit(SceneType::kFixedTip) | scene_bit(SceneType::kFrictionless);
+
+/// One row per IntegratorType: kName, kScenes, kStepLimit, kHelp, kSceneNote and Driver<Model>.
+template <IntegratorType type>
+struct Integrator;
+
+/// IntegratorType's values run from kAuto to kExact: a new integrator goes before kExact's row
+/// in the enum or moves this bound.
+constexpr int kIntegratorCount = static_cast<int>(IntegratorType::kExact) + 1;
+
+template <>
+struct Integrator<IntegratorType::kAuto> {
+  static constexpr const char* kName = "auto";
+  static constexpr unsigned kScenes = kAllScenes;
+  static constexpr StepLimit kStepLimit = StepLimit::kNone;
+  static constexpr const char* kHelp =
+      "splitting6 for fixed_tip, gauss6 for frictionless; viscous: radau5 when the friction time "
+      "m/(k (1 + m h^2/A)) is shorter than step, dop853 otherwise (shortens a fixed step it cannot take)";
+  static constexpr const char* kSceneNote = "";
+  template <class Model>
+  using Driver = void;  // resolved to another row by the scene factory
+};
+
+template <>
+struct Integrator<IntegratorType::kRk4> {
+  static constexpr const char* kName = "rk4";
+  static constexpr unsigned kScenes = kAllScenes;
+  static constexpr StepLimit kStepLimit = StepLimit::kOscillationsAndFriction;  // explicit: unstable beyond 2.79 / lambda
+  static constexpr const char* kHelp = "classical Runge-Kutta, order 4";
+  static constexpr const char* kSceneNote = "";
+  template <class Model>
+  using Driver = FixedStepDriver<Model, ClassicalRk4<Model>>;
+};
+
+template <>
+struct Integrator<IntegratorType::kDopri5> {
+  static constexpr const char* kName = "dopri5";
+  static constexpr unsigned kScenes = kAllScenes;
+  static constexpr StepLimit kStepLimit = StepLimit::kNone;
+  static constexpr const char* kHelp = "Dormand-Prince 5(4), dense output";
+  static constexpr const char* kSceneNote = "";
+  template <class Model>
+  using Driver = AdaptiveDriver<Model, DormandPrince54<Model>>;
+};
+
+template <>
+struct Integrator<IntegratorType::kDop853> {
+  static constexpr const char* kName = "dop853";
+  static constexpr unsigned kScenes = kAllScenes;
+  static constexpr StepLimit kStepLimit = StepLimit::kNone;
+  static constexpr const char* kHelp = "Dormand-Prince 8(5,3), dense output of order 7";
+  static constexpr const char* kSceneNote = "";
+  template <class Model>
+  using Driver = AdaptiveDriver<Model, DormandPrince853<Model>>;
+};
+
+/// The three splittings differ only in their composition scheme.
+template <class Scheme>
+struct SplittingRow {
+  static constexpr const char* kName = Scheme::kName;
+  static constexpr unsigned kScenes = kFixedTipOnly;
+  static constexpr StepLimit kStepLimit = StepLimit::kOscillations;
+  static constexpr const char* kSceneNote = "its free rotation is exact only about a fixed pivot";
+  template <class Model>
+  using Driver = FixedStepDriver<Model, Splitting<Model, Scheme>>;
+};
+
+template <>
+struct Integrator<IntegratorType::kSplitting4> : SplittingRow<BlanesMoan4> {
+  static constexpr const char* kHelp =
+      "exact free rotation + gravity kick, Blanes-Moan order 4: exact omega_Z and L_z, bounded energy error";
+};
+
+template <>
+struct Integrator<IntegratorType::kSplitting6> : SplittingRow<KahanLi6> {
+  static constexpr const char* kHelp = "the same, Kahan-Li order 6";
+};
+
+template <>
+struct Integrator<IntegratorType::kSplitting8> : SplittingRow<KahanLi8> {
+  static constexpr const char* kHelp = "the same, Kahan-Li order 8";
+};
+
+template <>
+struct Integrator<IntegratorType::kGauss6> {
+  static constexpr const char* kName = "gauss6";
+  static constexpr unsigned kScenes = kIntegrableScenes;
+  static constexpr StepLimit kStepLimit = StepLimit::kOscillations;
+  static constexpr const char* kHelp =
+      "Gauss-Legendre collocation on (q, Gamma, omega_perp), order 6: exact omega_Z and L_z, bounded energy error";
+  static constexpr const char* kSceneNote =
+      "its reduced variables close only when the attitude dynamics depend on the vertical and the body rates "
+      "alone, i.e. without friction";
+  template <class Model>
+  using Driver = FixedStepDriver<Model, ReducedGauss6<Model>>;
+};
+
+template <>
+struct Integrator<IntegratorType::kRadau5> {
+  static constexpr const char* kName = "radau5";
+  static constexpr unsigned kScenes = kAllScenes;
+  static constexpr StepLimit kStepLimit = StepLimit::kOscillations;  // L-stable: friction does not limit it
+  static constexpr const char* kHelp = "Radau IIA order 5, L-stable: stiff friction";
+  static constexpr const char* kSceneNote = "";
+  template <class Model>
+  using Driver = FixedStepDriver<Model, RadauIIA5<Model>>;
+};
+
+template <>
+struct Integrator<IntegratorType::kRodas4> {
+  static constexpr const char* kName = "rodas4";
+  static constexpr unsigned kScenes = kAllScenes;
+  static constexpr StepLimit kStepLimit = StepLimit::kOscillations;
+  static constexpr const char* kHelp = "Rosenbrock RODAS, L-stable: moderately stiff friction (see radau.hpp)";
+  static constexpr const char* kSceneNote = "";
+  template <class Model>
+  using Driver = FixedStepDriver<Model, Rodas4<Model>>;
+};
+
+template <>
+struct Integrator<IntegratorType::kExact> {
+  static constexpr const char* kName = ExactDriver<FixedTip>::kName;
+  static constexpr unsigned kScenes = kIntegrableScenes;  // as ExactSolution's static_assert
+  static constexpr StepLimit kStepLimit = StepLimit::kNone;
+  static constexpr const char* kHelp =
+      "closed-form solution by quadrature, evaluated at each requested time; refuses a few degenerate states "
+      "(doc/integrators.md)";
+  static constexpr const char* kSceneNote =
+      "they are integrable: energy, L_z and omega_Z are conserved; viscous friction dissipates energy, so the "
+      "viscous top has no such solution";
+  template <class Model>
+  using Driver = ExactDriver<Model>;
+};
+
+template <class Model, IntegratorType type>
+using DriverFor = typename Integrator<type>::template Driver<Model>;
+
+template <IntegratorType type, class Model>
+constexpr bool serves() {
+  return (Integrator<type>::kScenes & scene_bit(SceneOf<Model>::value)) != 0;
+}
+
+namespace registry_detail {
+template <class Driver, class = void>
+struct is_closed_form : std::false_type {};
+template <class Driver>
+struct is_closed_form<Driver, std::void_t<decltype(Driver::kClosedForm)>> : std::bool_constant<Driver::kClosedForm> {};
+}  // namespace registry_detail
+
+/// The kind of a driver: closed form (ExactDriver), adaptive or fixed step; void is auto's.
+template <class Driver>
+constexpr IntegratorKind kind_of_driver() {
+  if constexpr (std::is_void_v<Driver>) {
+    return IntegratorKind::kAutomatic;
+  } else if constexpr (registry_detail::is_closed_form<Driver>::value) {
+    return IntegratorKind::kClosedForm;
+  } else if constexpr (Driver::kAdaptive) {
+    return IntegratorKind::kAdaptive;
+  } else {
+    return IntegratorKind::kFixedStep;
+  }
+}
+
+/// The kind of a row, read off its driver for the first scene it serves.
+template <IntegratorType type>
+constexpr IntegratorKind kind_of() {
+  constexpr unsigned scenes = Integrator<type>::kScenes;
+  if constexpr ((scenes & scene_bit(SceneType::kFixedTip)) != 0)
+    return kind_of_driver<DriverFor<FixedTip, type>>();
+  else if constexpr ((scenes & scene_bit(SceneType::kFrictionless)) != 0)
+    return kind_of_driver<DriverFor<Frictionless, type>>();
+  else
+    return kind_of_driver<DriverFor<Viscous, type>>();
+}
+
+}  // namespace spinning_top

@@ -1,0 +1,11 @@
+// The frictionless scene's simulators, one per integrator that serves it (the registry's rows): the
+// scene's drivers are instantiated here and nowhere else.
+#include "scene_simulator.hpp"
+
+namespace spinning_top {
+namespace scene_factory {
+
+std::unique_ptr<Simulator> make_frictionless_simulator(const SceneConfig& config) { return make_scene_simulator<Frictionless>(config); }
+
+}  // namespace scene_factory
+}  // namespace spinning_top
