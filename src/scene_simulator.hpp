@@ -10,37 +10,30 @@
 #include <utility>
 
 #include "scene_factories.hpp"
+#include "spinning_top/auto_driver.hpp"
 #include "spinning_top/integrators/registry_rows.hpp"
 #include "spinning_top/simulator.hpp"
 
 namespace spinning_top {
 namespace scene_factory {
 
-/// The substep a fixed-step driver runs at: the configured step, or, for auto, at most half
-/// the largest step of the method auto picked (auto is never refused: it shortens the substep).
-inline double fixed_substep(const SceneConfig& config) {
-  if (config.integrator.type != IntegratorType::kAuto) return config.integrator.step;
-  return std::min(config.integrator.step, 0.5 * largest_fixed_step(config, auto_integrator(config)));
-}
-
+/// The driver for a validated configuration: auto's from the whole configuration (it plans
+/// per state), the others from the integrator settings as given.
 template <class Driver>
 Driver make_driver(const SceneConfig& config) {
-  constexpr IntegratorKind kind = kind_of_driver<Driver>();
-  if constexpr (kind == IntegratorKind::kClosedForm) {
-    return Driver();
-  } else if constexpr (kind == IntegratorKind::kAdaptive) {
-    return Driver(config.integrator.tolerance);
-  } else {
-    return Driver(fixed_substep(config));
-  }
+  if constexpr (kind_of_driver<Driver>() == IntegratorKind::kAutomatic)
+    return Driver(config);
+  else
+    return spinning_top::make_driver<Driver>(config.integrator);
 }
 
 template <class Model, class Driver>
 class SceneSimulator final : public Simulator {
  public:
+  static constexpr bool kAutomatic = kind_of_driver<Driver>() == IntegratorKind::kAutomatic;
+
   explicit SceneSimulator(const SceneConfig& config)
       : config_(config), model_(config.top, config.initial), driver_(make_driver<Driver>(config)) {
-    prefix_ = config.integrator.type == IntegratorType::kAuto ? "auto: " : "";
     driver_.reset(model_, 0.0, model_.initial_state());
   }
 
@@ -59,9 +52,13 @@ class SceneSimulator final : public Simulator {
     return s;
   }
 
-  void reset() override { driver_.reset(model_, 0.0, model_.initial_state()); }
+  bool reset() override {
+    const IntegratorChoice before = integrator_choice();
+    driver_.reset(model_, 0.0, model_.initial_state());
+    return switched(before);
+  }
 
-  void update(const TopParameters& top, const IntegratorSettings& integrator) override {
+  bool update(const TopParameters& top, const IntegratorSettings& integrator) override {
     SceneConfig next = config_;
     next.top = top;
     next.integrator = integrator;
@@ -73,6 +70,8 @@ class SceneSimulator final : public Simulator {
       throw InvalidParameter("integrator", "cannot change during a run");
     // The new model and driver start from the current state before anything is replaced:
     // a driver may refuse the state (exact: InvalidParameter), and then nothing has changed.
+    // auto's driver chooses again here, for this state.
+    const IntegratorChoice before = integrator_choice();
     Driver driver = make_driver<Driver>(next);
     Model model(next.top, next.initial);
     const double t = driver_.time();
@@ -83,24 +82,38 @@ class SceneSimulator final : public Simulator {
     model_ = std::move(model);
     driver_ = std::move(driver);
     if (event != Event::kNone) driver_.stop(event);  // a stopped run stays stopped until reset()
+    return switched(before);
   }
 
   const SceneConfig& config() const override { return config_; }
-  std::string integrator_description() const override { return prefix_ + driver_.description(); }
+  std::string integrator_description() const override {
+    return (kAutomatic ? "auto: " : "") + driver_.description();
+  }
+  IntegratorChoice integrator_choice() const override {
+    if constexpr (kAutomatic)
+      return driver_.choice();
+    else
+      return {config_.integrator.type, config_.integrator.type, false, ""};
+  }
   long steps() const override { return driver_.steps(); }
 
  private:
+  /// A switch is another method, or the same method for another reason to run it (fallback).
+  bool switched(const IntegratorChoice& before) const {
+    const IntegratorChoice now = integrator_choice();
+    return now.method != before.method || now.fallback != before.fallback;
+  }
+
   SceneConfig config_;
   Model model_;
   Driver driver_;
-  std::string prefix_;
 };
 
 /// The simulator for the integrator `type` on this scene, or null if the row does not serve it
 /// (validate() refuses that before).
 template <class Model, IntegratorType type>
 std::unique_ptr<Simulator> make_with(const SceneConfig& config) {
-  if constexpr (serves<type, Model>() && type != IntegratorType::kAuto)
+  if constexpr (serves<type, Model>())
     return std::make_unique<SceneSimulator<Model, DriverFor<Model, type>>>(config);
   else
     return nullptr;
@@ -115,12 +128,10 @@ std::unique_ptr<Simulator> make_any(const SceneConfig& config, IntegratorType ty
   return simulator;
 }
 
-/// Builds the scene's simulator for config.integrator (validated by the caller); auto runs the
-/// method auto_integrator() picks.
+/// Builds the scene's simulator for config.integrator (validated by the caller).
 template <class Model>
 std::unique_ptr<Simulator> make_scene_simulator(const SceneConfig& config) {
-  const IntegratorType type =
-      config.integrator.type == IntegratorType::kAuto ? auto_integrator(config) : config.integrator.type;
+  const IntegratorType type = config.integrator.type;
   std::unique_ptr<Simulator> simulator =
       make_any<Model>(config, type, std::make_integer_sequence<int, kIntegratorCount>());
   if (!simulator)

@@ -83,17 +83,26 @@ double largest_fixed_step(const SceneConfig& config, IntegratorType type) {
   return fastest > 0.0 ? 2.0 / fastest : std::numeric_limits<double>::infinity();
 }
 
-IntegratorType auto_integrator(const SceneConfig& config) {
-  switch (config.scene) {
-    case SceneType::kFixedTip: return IntegratorType::kSplitting6;
-    case SceneType::kFrictionless: return IntegratorType::kGauss6;
-    case SceneType::kViscous: {
-      // Compare the friction time with the substep radau5 would actually take.
-      const double substep = std::min(config.integrator.step, 0.5 * largest_fixed_step(config, IntegratorType::kRadau5));
-      return motion_rates(config).friction * substep > 1.0 ? IntegratorType::kRadau5 : IntegratorType::kDop853;
-    }
+AutoPlan auto_plan(const SceneConfig& config) {
+  const IntegratorSettings& settings = config.integrator;
+  AutoPlan plan;
+  if (integrator_info(IntegratorType::kExact).serves(config.scene)) {
+    plan.first = {IntegratorType::kExact, settings.step, settings.tolerance};
+    plan.fallback = {IntegratorType::kDop853, settings.step, std::min(settings.tolerance, kAutoFallbackTolerance)};
+    return plan;
   }
-  return IntegratorType::kDopri5;
+  // Viscous: compare the friction time with the substep radau5 would actually take.
+  const double radau5_substep = std::min(settings.step, 0.5 * largest_fixed_step(config, IntegratorType::kRadau5));
+  const double friction_rate = motion_rates(config).friction;
+  const bool stiff = friction_rate * radau5_substep > 1.0;
+  const double friction_time = 1.0 / friction_rate;  // infinite without friction
+  plan.first = settings;
+  plan.first.type = stiff ? IntegratorType::kRadau5 : IntegratorType::kDop853;
+  plan.first.step = std::min(settings.step, 0.5 * largest_fixed_step(config, plan.first.type));
+  plan.fallback.type = IntegratorType::kAuto;  // neither refuses a state
+  plan.reason = std::string(stiff ? "stiff" : "not stiff") + ": friction time " + format_seconds(friction_time) +
+                " s " + (stiff ? "<" : ">=") + " substep " + format_seconds(radau5_substep) + " s";
+  return plan;
 }
 
 namespace {

@@ -1,5 +1,6 @@
 // The integrators of issue 4: order of accuracy, exact invariants of the geometric
-// splitting, bounded energy error, stiff stability, the auto rule and refused steps.
+// splitting, bounded energy error, stiff stability, the auto rule (exact where it applies, the
+// stiffness rule for viscous friction, switches at update) and refused steps.
 // Reference solutions: dopri5 at tolerance 1e-13 (its global error on these runs is ~1e-12,
 // which is the floor below which no error ratio is measured).
 #include <gtest/gtest.h>
@@ -8,6 +9,7 @@
 #include <string>
 
 #include "spinning_top/drivers.hpp"
+#include "spinning_top/integrator_registry.hpp"
 #include "spinning_top/integrators/dop853.hpp"
 #include "spinning_top/integrators/dormand_prince.hpp"
 #include "spinning_top/integrators/gauss.hpp"
@@ -232,19 +234,89 @@ TEST(FixedStepDriver, OneSubstepPerRequestOfExactlyTheStep) {
   EXPECT_EQ(simulator->steps(), 20000);
 }
 
-TEST(AutoRule, GeometricForTheFixedTip) {
-  SceneConfig config;
-  config.initial = nutating_top();
-  EXPECT_EQ(config.integrator.type, IntegratorType::kAuto);  // the default
-  EXPECT_EQ(auto_integrator(config), IntegratorType::kSplitting6);
-  EXPECT_EQ(make_simulator(config)->integrator_description(), "auto: splitting6, step 0.001 s");
+TEST(Registry, EveryRowParsesBuildsWhereItServesAndIsRefusedElsewhere) {
+  ASSERT_EQ(integrator_registry().front().type, IntegratorType::kAuto);
+  for (const IntegratorInfo& row : integrator_registry()) {
+    EXPECT_EQ(parse_integrator(row.name), row.type);
+    EXPECT_STREQ(to_string(row.type), row.name);
+    EXPECT_EQ(&integrator_info(row.type), &row);
+    for (SceneType scene : {SceneType::kFixedTip, SceneType::kFrictionless, SceneType::kViscous}) {
+      SceneConfig config;
+      config.scene = scene;
+      config.initial = nutating_top();
+      config.top.friction = scene == SceneType::kViscous ? 0.02 : 0.0;
+      config.integrator.type = row.type;
+      if (!row.serves(scene)) {
+        try {
+          make_simulator(config);
+          ADD_FAILURE() << row.name << " built for " << to_string(scene);
+        } catch (const InvalidParameter& e) {
+          EXPECT_EQ(e.parameter(), "integrator");
+          EXPECT_NE(std::string(e.what()).find(row.scene_note), std::string::npos) << e.what();
+        }
+        continue;
+      }
+      const auto simulator = make_simulator(config);
+      const std::string description = simulator->integrator_description();
+      const IntegratorChoice choice = simulator->integrator_choice();
+      EXPECT_EQ(choice.configured, row.type);
+      // The kind is the driver's: what it reports is what it is.
+      switch (row.kind) {
+        case IntegratorKind::kAutomatic:
+          EXPECT_EQ(description.rfind("auto: ", 0), 0u) << description;
+          EXPECT_NE(choice.method, IntegratorType::kAuto);
+          break;
+        case IntegratorKind::kFixedStep:
+          EXPECT_EQ(description, std::string(row.name) + ", step 0.001 s");
+          break;
+        case IntegratorKind::kAdaptive:
+          EXPECT_EQ(description, std::string(row.name) + ", tolerance 1e-10");
+          EXPECT_TRUE(std::isinf(largest_fixed_step(config, row.type)));
+          break;
+        case IntegratorKind::kClosedForm:
+          EXPECT_EQ(description.rfind(std::string(row.name) + ": ", 0), 0u) << description;
+          EXPECT_TRUE(std::isinf(largest_fixed_step(config, row.type)));
+          break;
+      }
+      if (row.kind != IntegratorKind::kAutomatic) EXPECT_EQ(choice.method, row.type);
+    }
+  }
+  // auto's help line states the fallback tolerance it runs at.
+  char tolerance[32];
+  std::snprintf(tolerance, sizeof tolerance, "tolerance %g", kAutoFallbackTolerance);
+  EXPECT_NE(std::string(integrator_info(IntegratorType::kAuto).help).find(tolerance), std::string::npos);
 }
 
-TEST(AutoRule, GeometricForTheFrictionlessTop) {
-  SceneConfig config;
-  config.scene = SceneType::kFrictionless;
-  config.initial = nutating_top();
-  EXPECT_EQ(make_simulator(config)->integrator_description(), "auto: gauss6, step 0.001 s");
+TEST(AutoRule, ExactForTheIntegrableScenesWithDop853AsFallback) {
+  for (SceneType scene : {SceneType::kFixedTip, SceneType::kFrictionless}) {
+    SceneConfig config;
+    config.scene = scene;
+    config.initial = nutating_top();
+    EXPECT_EQ(config.integrator.type, IntegratorType::kAuto);  // the default
+    const AutoPlan plan = auto_plan(config);
+    EXPECT_EQ(plan.first.type, IntegratorType::kExact);
+    EXPECT_EQ(plan.fallback.type, IntegratorType::kDop853);
+    EXPECT_EQ(plan.fallback.tolerance, kAutoFallbackTolerance);  // tighter than the default 1e-10
+    config.integrator.tolerance = 1e-13;
+    EXPECT_EQ(auto_plan(config).fallback.tolerance, 1e-13);  // a tighter setting is kept
+    config.integrator.tolerance = 1e-10;
+
+    auto simulator = make_simulator(config);
+    const IntegratorChoice choice = simulator->integrator_choice();
+    EXPECT_EQ(choice.configured, IntegratorType::kAuto);
+    EXPECT_EQ(choice.method, IntegratorType::kExact);
+    EXPECT_FALSE(choice.fallback);
+    EXPECT_EQ(simulator->integrator_description().rfind("auto: exact: quadrature, nutation period ", 0), 0u)
+        << simulator->integrator_description();
+    // auto runs exact itself: bit for bit the trajectory of the named method.
+    SceneConfig named = config;
+    named.integrator.type = IntegratorType::kExact;
+    auto exact = make_simulator(named);
+    ASSERT_EQ(simulator->advance_to(3.0), Event::kNone);
+    ASSERT_EQ(exact->advance_to(3.0), Event::kNone);
+    EXPECT_EQ(simulator->snapshot().attitude.coeffs(), exact->snapshot().attitude.coeffs());
+    EXPECT_EQ(simulator->snapshot().body_rates, exact->snapshot().body_rates);
+  }
 }
 
 TEST(AutoRule, StiffStableWhenFrictionIsFasterThanTheStep) {
@@ -253,9 +325,40 @@ TEST(AutoRule, StiffStableWhenFrictionIsFasterThanTheStep) {
   config.initial = nutating_top();
   // lambda = k (1/m + h^2/A) = k * 20 1/(kg): k = 0.01 -> 0.2 1/s (slow), k = 1e3 -> 2e4 1/s.
   config.top.friction = 0.01;
-  EXPECT_EQ(make_simulator(config)->integrator_description(), "auto: dop853, tolerance 1e-10");
+  auto simulator = make_simulator(config);
+  EXPECT_EQ(simulator->integrator_description(),
+            "auto: dop853, tolerance 1e-10 (not stiff: friction time 5 s >= substep 0.001 s)");
+  EXPECT_EQ(simulator->integrator_choice().method, IntegratorType::kDop853);
   config.top.friction = 1e3;
-  EXPECT_EQ(make_simulator(config)->integrator_description(), "auto: radau5, step 0.001 s");
+  EXPECT_EQ(make_simulator(config)->integrator_description(),
+            "auto: radau5, step 0.001 s (stiff: friction time 5e-05 s < substep 0.001 s)");
+}
+
+TEST(AutoRule, AChangeOfFrictionAtUpdateSwitchesBetweenStiffAndNonStiffAndSaysSo) {
+  SceneConfig config;
+  config.scene = SceneType::kViscous;
+  config.initial = nutating_top();
+  config.top.friction = 0.01;
+  auto simulator = make_simulator(config);
+  ASSERT_EQ(simulator->advance_to(0.5), Event::kNone);
+  const Snapshot before = simulator->snapshot();
+  TopParameters stiff = config.top;
+  stiff.friction = 1e3;
+  EXPECT_TRUE(simulator->update(stiff, config.integrator));
+  EXPECT_EQ(simulator->integrator_choice().method, IntegratorType::kRadau5);
+  // The switch keeps time and state: the new driver starts from the old one's state (the
+  // quaternion is renormalised, a change of ~1 ulp).
+  const Snapshot after = simulator->snapshot();
+  EXPECT_EQ(after.time, before.time);
+  EXPECT_LT((after.attitude.coeffs() - before.attitude.coeffs()).norm(), 1e-15);
+  EXPECT_EQ(after.body_rates, before.body_rates);
+  EXPECT_LT((after.outputs.center_of_mass_velocity - before.outputs.center_of_mass_velocity).norm(), 1e-15);
+  TopParameters stiffer = stiff;
+  stiffer.friction = 2e3;
+  EXPECT_FALSE(simulator->update(stiffer, config.integrator));  // still radau5: no switch
+  ASSERT_EQ(simulator->advance_to(0.6), Event::kNone);
+  EXPECT_TRUE(simulator->update(config.top, config.integrator));  // back to dop853
+  EXPECT_EQ(simulator->integrator_choice().method, IntegratorType::kDop853);
 }
 
 TEST(RefusedSteps, FixedStepBeyondTheNutationIsRefusedNamingStep) {
@@ -295,13 +398,25 @@ TEST(RefusedSteps, ExplicitRk4BeyondTheFrictionStabilityLimitIsRefused) {
 
 TEST(RefusedSteps, AutoShortensTheSubstepInsteadAndStaysFinite) {
   SceneConfig config;
+  config.scene = SceneType::kViscous;
   config.initial = nutating_top();
-  config.integrator.step = 0.05;  // beyond the limit: auto runs at half the limit instead
+  config.top.friction = 1e3;      // stiff: auto runs radau5 at a fixed step
+  config.integrator.step = 0.05;  // beyond its limit 2/225 rad/s: auto runs at half the limit instead
   auto simulator = make_simulator(config);
-  EXPECT_EQ(simulator->integrator_description(), "auto: splitting6, step 0.00888889 s");
-  const double e0 = simulator->snapshot().outputs.energy;
-  ASSERT_EQ(simulator->advance_to(1.0), Event::kNone);
-  EXPECT_NEAR(simulator->snapshot().outputs.energy, e0, 1e-6 * e0);
+  EXPECT_EQ(simulator->integrator_description(),
+            "auto: radau5, step 0.00444444 s (stiff: friction time 5e-05 s < substep 0.00444 s)");
+  // It is radau5 at that substep, which a named radau5 takes too, but is refused at 0.05 s.
+  SceneConfig named = config;
+  named.integrator.type = IntegratorType::kRadau5;
+  EXPECT_THROW(make_simulator(named), InvalidParameter);
+  named.integrator.step = 0.5 * largest_fixed_step(config, IntegratorType::kRadau5);
+  auto radau5 = make_simulator(named);
+  for (int i = 1; i <= 100; ++i) {
+    ASSERT_EQ(simulator->advance_to(0.01 * i), Event::kNone);
+    ASSERT_EQ(radau5->advance_to(0.01 * i), Event::kNone);
+  }
+  EXPECT_EQ(simulator->snapshot().attitude.coeffs(), radau5->snapshot().attitude.coeffs());
+  EXPECT_GT(simulator->snapshot().outputs.dissipated_energy, 0.0);  // friction has done work
 }
 
 TEST(RefusedSteps, SplittingOnlyForTheFixedTip) {

@@ -13,16 +13,9 @@
 namespace spinning_top {
 
 enum class SceneType { kFixedTip, kFrictionless, kViscous };
-/// kAuto picks per scene and parameters (see auto_integrator()); the others force a method:
-/// rk4 (classical, fixed step), dopri5 (adaptive 5(4), dense output), dop853 (adaptive 8(5,3),
-/// dense output of order 7), splitting4/6/8 (fixed
-/// tip only: exact free rotation + gravity kick, composed to order 4/6/8; conserves omega_Z
-/// and L_z exactly, bounded energy error), gauss6 (fixed tip and frictionless: Gauss-Legendre
-/// collocation on (q, Gamma, omega_perp), same invariants), radau5 (Radau IIA order 5, fixed step, L-stable:
-/// stiff friction), rodas4 (L-stable Rosenbrock, fixed step: moderately stiff friction only,
-/// see radau.hpp), exact (fixed tip and frictionless: the closed-form solution by quadrature,
-/// evaluated at each requested time, no step; integrators/exact.hpp). doc/integrators.md
-/// explains the choice.
+/// The integrators; integrator_registry.hpp says what each is, which scenes it serves and its
+/// kind (integrators/registry_rows.hpp defines them). kAuto runs auto_plan()'s choice.
+/// doc/integrators.md explains them.
 enum class IntegratorType {
   kAuto, kRk4, kDopri5, kDop853, kSplitting4, kSplitting6, kSplitting8, kGauss6, kRadau5, kRodas4, kExact
 };
@@ -69,19 +62,41 @@ struct MotionRates {
 MotionRates motion_rates(const SceneConfig& config);
 
 /// The largest fixed step [s] that `type` can take on this configuration: 2 / (fastest rate),
-/// i.e. at least pi steps per period of the fastest oscillation, and, for the explicit rk4 in
-/// the viscous scene, 2 / lambda (inside its stability interval, |R(-2)| < 1). Infinity for
-/// the adaptive dopri5 and dop853, for exact (no step) and for auto (which shortens its substep instead). validate() refuses
-/// a larger step with InvalidParameter("step", ...) naming this limit.
+/// i.e. at least pi steps per period of the fastest oscillation, and, for an explicit method
+/// (rk4) in the viscous scene, 2 / lambda (inside its stability interval, |R(-2)| < 1): the
+/// registry's StepLimit of the row. Infinity for every kind but fixed step (auto shortens its
+/// substep instead). validate() refuses a larger step with InvalidParameter("step", ...) naming
+/// this limit.
 double largest_fixed_step(const SceneConfig& config, IntegratorType type);
 
-/// What `integrator: auto` runs for this configuration (doc/integrators.md, "auto"):
-///   fixed_tip -> splitting6, frictionless -> gauss6 (both geometric), viscous -> radau5 when the
-///   friction time 1/lambda = m / (k (1 + m h^2 / A)) is shorter than radau5's substep (below),
-///   else dop853 (adaptive: at tolerance 1e-10 it takes 4x fewer steps than dopri5 and is 15x
-///   more accurate, doc/integrators.md).
-/// Fixed-step choices run at min(step, largest_fixed_step / 2).
-IntegratorType auto_integrator(const SceneConfig& config);
+/// What `integrator: auto` runs for a configuration (doc/integrators.md, "The auto rule").
+struct AutoPlan {
+  IntegratorSettings first;     ///< the first choice, with the step or tolerance auto runs it at
+  IntegratorSettings fallback;  ///< run instead where `first` refuses the state; type kAuto: none
+  std::string reason;           ///< why `first` (shown in the description), "" when it needs none
+};
+
+/// The largest local error tolerance at which dop853 stays within 1e-9 rad of exact over 10 s
+/// on the toy tops, measured (doc/integrators.md, "Fallback tolerance"): auto's fallback runs at
+/// this tolerance, or at the configured one if that is smaller.
+constexpr double kAutoFallbackTolerance = 1e-12;
+
+/// auto's rule:
+///   fixed_tip, frictionless -> exact (the closed form: round-off accuracy, no step), falling back
+///     to dop853 at min(tolerance, kAutoFallbackTolerance) for a state exact refuses;
+///   viscous -> radau5 when the friction time 1/lambda = m / (k (1 + m h^2 / A)) is shorter than
+///     radau5's substep, else dop853 at `tolerance` (not stiff: at 1e-10 it takes 4x fewer steps
+///     than dopri5 and is 15x more accurate, doc/integrators.md).
+/// Fixed-step choices run at min(step, largest_fixed_step / 2): auto is never refused a step.
+AutoPlan auto_plan(const SceneConfig& config);
+
+/// Which method runs, and why.
+struct IntegratorChoice {
+  IntegratorType configured = IntegratorType::kAuto;  ///< the `integrator` setting
+  IntegratorType method = IntegratorType::kAuto;      ///< what runs (never kAuto)
+  bool fallback = false;  ///< auto's first choice refused the state it (re)started from; `method` is the fallback
+  std::string reason;     ///< auto: the first choice's refusal (fallback), or why it is the first choice; may be ""
+};
 
 /// What a front end shows of the simulation at one instant.
 struct Snapshot {
@@ -103,16 +118,22 @@ class Simulator {
   virtual Event event() const = 0;
   /// The state at time(): always finite, and physically valid (R >= 0, e_Zz > 0).
   virtual Snapshot snapshot() const = 0;
-  /// Back to the configured initial state at time 0.
-  virtual void reset() = 0;
+  /// Back to the configured initial state at time 0. auto chooses again for that state.
+  /// Returns true if auto now runs another method than before (integrator_choice() says which
+  /// and why).
+  virtual bool reset() = 0;
   /// Changes physical parameters and integrator settings during a run, keeping the state
   /// and time. The scene, the initial conditions and the top's mass properties cannot
   /// change this way. Throws InvalidParameter (and changes nothing) if the update is invalid.
-  virtual void update(const TopParameters& top, const IntegratorSettings& integrator) = 0;
+  /// auto chooses again for the current state (exact may now refuse it, or accept it again):
+  /// returns true if it switched method; time and state continue across the switch.
+  virtual bool update(const TopParameters& top, const IntegratorSettings& integrator) = 0;
   virtual const SceneConfig& config() const = 0;
-  /// e.g. "dopri5, tolerance 1e-10", "rk4, step 0.001 s" or, for auto,
-  /// "auto: splitting6, step 0.001 s".
+  /// What runs and why, e.g. "dopri5, tolerance 1e-10", "rk4, step 0.001 s" or, for auto,
+  /// "auto: exact: quadrature, nutation period 0.0559 s, 12 Fourier terms" or
+  /// "auto: dop853, tolerance 1e-12 (exact refused: <its reason>)".
   virtual std::string integrator_description() const = 0;
+  virtual IntegratorChoice integrator_choice() const = 0;
   /// Accepted integration steps since the last reset (a cost measure).
   virtual long steps() const = 0;
 };

@@ -38,6 +38,9 @@ struct SceneOf<Viscous> : std::integral_constant<SceneType, SceneType::kViscous>
 constexpr unsigned kFixedTipOnly = scene_bit(SceneType::kFixedTip);
 constexpr unsigned kIntegrableScenes = scene_bit(SceneType::kFixedTip) | scene_bit(SceneType::kFrictionless);
 
+template <class Model>
+class AutoDriver;  // auto_driver.hpp: runs other rows' drivers
+
 /// One row per IntegratorType: kName, kScenes, kStepLimit, kHelp, kSceneNote and Driver<Model>.
 template <IntegratorType type>
 struct Integrator;
@@ -52,11 +55,12 @@ struct Integrator<IntegratorType::kAuto> {
   static constexpr unsigned kScenes = kAllScenes;
   static constexpr StepLimit kStepLimit = StepLimit::kNone;
   static constexpr const char* kHelp =
-      "splitting6 for fixed_tip, gauss6 for frictionless; viscous: radau5 when the friction time "
-      "m/(k (1 + m h^2/A)) is shorter than step, dop853 otherwise (shortens a fixed step it cannot take)";
+      "exact for fixed_tip and frictionless, dop853 (tolerance 1e-12) for a state exact refuses; viscous: radau5 "
+      "when the friction time m/(k (1 + m h^2/A)) is shorter than step, dop853 otherwise; chooses again at reset "
+      "and live updates, and says what it runs and why";
   static constexpr const char* kSceneNote = "";
   template <class Model>
-  using Driver = void;  // resolved to another row by the scene factory
+  using Driver = AutoDriver<Model>;
 };
 
 template <>
@@ -179,16 +183,20 @@ constexpr bool serves() {
 }
 
 namespace registry_detail {
+template <class Driver>
+struct is_auto_driver : std::false_type {};
+template <class Model>
+struct is_auto_driver<AutoDriver<Model>> : std::true_type {};
 template <class Driver, class = void>
 struct is_closed_form : std::false_type {};
 template <class Driver>
 struct is_closed_form<Driver, std::void_t<decltype(Driver::kClosedForm)>> : std::bool_constant<Driver::kClosedForm> {};
 }  // namespace registry_detail
 
-/// The kind of a driver: closed form (ExactDriver), adaptive or fixed step; void is auto's.
+/// The kind of a driver: automatic (AutoDriver), closed form (ExactDriver), adaptive or fixed step.
 template <class Driver>
 constexpr IntegratorKind kind_of_driver() {
-  if constexpr (std::is_void_v<Driver>) {
+  if constexpr (registry_detail::is_auto_driver<Driver>::value) {
     return IntegratorKind::kAutomatic;
   } else if constexpr (registry_detail::is_closed_form<Driver>::value) {
     return IntegratorKind::kClosedForm;
