@@ -4,6 +4,7 @@
 //   simulate --config FILE.yaml [--set key=value]... [--duration SECONDS]
 //            [--output-rate HZ] [--output FILE.csv]
 //
+// The CSV starts with one comment line, "# integrator: <what ran and why>".
 // Exit codes: 0 success (also when a validity event ends the run early), 1 runtime error
 // unrelated to the input (e.g. the output cannot be written), 2 bad input (options, YAML,
 // keys, values). On exit code 2 nothing is written; a file output appears only complete.
@@ -126,7 +127,16 @@ void print_help(std::ostream& out) {
     out << row.help << "\n";
   }
   out << "\n"
-         "Output: the CSV header\n"
+         "auto (the default) runs exact for fixed_tip and frictionless; where exact refuses the state (a\n"
+         "few degenerate ones, e.g. an axis vertical while it moves, or g = 0 on the frictionless floor) it\n"
+         "runs dop853 at tolerance "
+      << kAutoFallbackTolerance
+      << " instead. The output's first line says which method ran and why.\n"
+         "\n"
+         "Output: a comment naming the integrator that ran, e.g.\n"
+         "  # integrator: auto: exact: quadrature, nutation period 0.058 s, 9 Fourier terms\n"
+         "  # integrator: auto: dop853, tolerance 1e-12 (exact refused: <its reason>)\n"
+         "then the CSV header\n"
          "  "
       << kCsvHeader
       << "\n"
@@ -312,8 +322,10 @@ void write_row(std::FILE* out, double t, const Snapshot& s, Event event) {
   std::fprintf(out, "%s\n", to_string(event));
 }
 
-/// Runs the scene and writes the header and every row; returns the event that ended it.
+/// Runs the scene and writes the header comment (the method that runs, and why), the header
+/// and every row; returns the event that ended it.
 Event run(Simulator& simulator, const OutputTimes& times, std::FILE* out) {
+  std::fprintf(out, "# integrator: %s\n", simulator.integrator_description().c_str());
   std::fprintf(out, "%s\n", kCsvHeader);
   // An initial state that already violates the model is an event at t = 0.
   Event event = simulator.event();

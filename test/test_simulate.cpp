@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "spinning_top/config.hpp"
+#include "spinning_top/integrator_registry.hpp"
 
 #ifndef SIMULATE_EXECUTABLE
 #error "SIMULATE_EXECUTABLE must name the built simulate executable"
@@ -27,6 +28,7 @@ namespace {
 
 const std::string kHeader =
     "t,qw,qx,qy,qz,gx,gy,gz,px,py,normal_force,contact_force_x,contact_force_y,energy,event";
+const std::string kIntegratorComment = "# integrator: ";
 const std::string kFixedTipYaml = std::string(SPINNING_TOP_SOURCE_DIR) + "/config/fixed_tip.yaml";
 
 // The toy top of config/fixed_tip.yaml (checked against the file in FirstRowIsTheInitialState).
@@ -104,10 +106,15 @@ class SimulateTest : public ::testing::Test {
     return path;
   }
 
-  /// Splits CSV text into the header and the rows, checking each row's shape.
-  static std::vector<Row> parse_csv(const std::string& text, std::string* header = nullptr) {
+  /// Splits CSV text into its comment line (what integrator ran), the header and the rows,
+  /// checking the comment's form and each row's shape.
+  static std::vector<Row> parse_csv(const std::string& text, std::string* header = nullptr,
+                                    std::string* integrator = nullptr) {
     std::istringstream lines(text);
     std::string line;
+    std::getline(lines, line);
+    EXPECT_EQ(line.rfind(kIntegratorComment, 0), 0u) << line;
+    if (integrator) *integrator = line.substr(std::min(line.size(), kIntegratorComment.size()));
     std::getline(lines, line);
     if (header) *header = line;
     std::vector<Row> rows;
@@ -137,7 +144,35 @@ class SimulateTest : public ::testing::Test {
 TEST_F(SimulateTest, HeaderIsExactlyTheContract) {
   const Result r = simulate({"--config", kFixedTipYaml, "--duration", "0.01"});
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_EQ(r.out.substr(0, r.out.find('\n')), kHeader);
+  std::string header, integrator;
+  parse_csv(r.out, &header, &integrator);
+  EXPECT_EQ(header, kHeader);
+  // The scene file says nothing of the integrator: auto runs the closed form.
+  EXPECT_EQ(integrator.rfind("auto: exact: quadrature, nutation period ", 0), 0u) << integrator;
+}
+
+TEST_F(SimulateTest, WhereExactRefusesTheStateTheCommentNamesTheFallbackAndTheReason) {
+  // The axis vertical while it tips at 1 rad/s: exact's Euler angles are singular there.
+  const Result r = simulate({"--config", kFixedTipYaml, "--set", "initial/tilt=0", "--set", "initial/nutation_rate=1"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  std::string integrator;
+  const std::vector<Row> rows = parse_csv(r.out, nullptr, &integrator);
+  EXPECT_EQ(integrator.rfind("auto: dop853, tolerance 1e-12 (exact refused: ", 0), 0u) << integrator;
+  EXPECT_NE(integrator.find("vertical while it moves"), std::string::npos) << integrator;
+  // And the fallback's rows are physics: the energy of this conservative motion (E0 = 0.69 J)
+  // conserved (measured 6.4e-16 relative; 1e-10 separates a wrong law), the axis within the
+  // cubic's band (L_z = C wZ: at most 0.0185 rad from the vertical, test_exact) and the tip fixed.
+  ASSERT_EQ(rows.size(), 1001u);
+  const double e0 = rows.front().values[kEnergy];
+  double energy = 0.0, widest = 0.0;
+  for (const Row& row : rows) {
+    energy = std::max(energy, std::abs(row.values[kEnergy] - e0) / e0);
+    widest = std::max(widest, std::acos(std::min(1.0, row.values[kGz] / kH)));
+    EXPECT_EQ(row.values[kPx], 0.0);
+  }
+  EXPECT_LT(energy, 1e-10);
+  EXPECT_LT(widest, 0.0186);
+  EXPECT_GT(widest, 0.015);  // it does tip over, sampled every 10 ms of a 56 ms nutation
 }
 
 TEST_F(SimulateTest, RowsAtEveryOutputInstantFromZeroToTheEndInclusive) {
@@ -189,10 +224,8 @@ TEST_F(SimulateTest, FixedTipSceneFileConservesEnergyOverTenSeconds) {
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const std::vector<Row> rows = parse_csv(r.out);
   ASSERT_EQ(rows.size(), 1001u);
-  // Dormand-Prince at its default local tolerance 1e-10 over ~10^4 steps: errors that
-  // accumulate linearly would stay below ~1e-6, but energy error of a 5th-order method on a
-  // smooth periodic motion grows far slower; measured: 3.5e-11 relative after 10 s. 1e-9
-  // (the bound) flags a wrong energy formula or a broken integrator, not round-off.
+  // auto runs exact here, whose energy is round-off (measured 1.6e-16 relative); 1e-9 (the
+  // issue's bound) flags a wrong energy formula or a broken integrator, not round-off.
   const double e0 = rows.front().values[kEnergy];
   double worst = 0.0;
   for (const Row& row : rows) worst = std::max(worst, std::abs(row.values[kEnergy] - e0) / e0);
@@ -413,6 +446,17 @@ TEST_F(SimulateTest, HelpDocumentsEveryKeyWithUnitDefaultAndRequirement) {
   }
   for (const char* option : {"--config", "--set", "--duration", "--output-rate", "--output"})
     EXPECT_NE(r.out.find(option), std::string::npos) << option;
+  // The integrator table: one line per registry row, with its scenes, kind and help.
+  for (const spinning_top::IntegratorInfo& row : spinning_top::integrator_registry()) {
+    bool found = false;
+    for (const std::string& line : table) {
+      if (line.rfind("  " + std::string(row.name) + " ", 0) != 0 || line.find(row.help) == std::string::npos) continue;
+      found = true;
+      EXPECT_NE(line.find(row.scene_names()), std::string::npos) << line;
+      EXPECT_NE(line.find(spinning_top::to_string(row.kind)), std::string::npos) << line;
+    }
+    EXPECT_TRUE(found) << "--help does not list the integrator " << row.name;
+  }
 }
 
 }  // namespace

@@ -190,7 +190,7 @@ SpinningTopNode::SpinningTopNode(ros::NodeHandle nh, ros::NodeHandle private_nh)
   window_wall_start_ = ros::WallTime::now();
   restart_timer();
   diagnostics_timer_ = nh_.createWallTimer(ros::WallDuration(1.0), &SpinningTopNode::on_diagnostics_timer, this);
-  ROS_INFO("spinning_top: scene %s, %s, %g Hz, real-time factor %g%s", to_string(config.scene),
+  ROS_INFO("spinning_top: scene %s, integrator %s, %g Hz, real-time factor %g%s", to_string(config.scene),
            simulator_->integrator_description().c_str(), settings_.rate, settings_.real_time_factor,
            paused_ ? " (paused)" : "");
 }
@@ -448,7 +448,11 @@ void SpinningTopNode::diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat
     status.mergeSummaryf(DiagnosticStatus::ERROR, "event %s at t = %.9g s", to_string(reported_event_), event_time_);
 
   status.add("scene", to_string(simulator_->config().scene));
+  // What runs and why (auto: its choice, and exact's refusal where it fell back).
+  const IntegratorChoice choice = simulator_->integrator_choice();
   status.add("integrator", simulator_->integrator_description());
+  status.add("integrator method", to_string(choice.method));
+  if (choice.fallback) status.add("integrator fallback reason", choice.reason);
   status.add("integrator steps since reset", simulator_->steps());
   status.addf("simulated time [s]", "%.9g", s.time);
   status.add("event", reported_event_ == Event::kNone ? "none" : to_string(reported_event_));
@@ -500,12 +504,17 @@ void SpinningTopNode::reconfigure(SpinningTopConfig& config, uint32_t /*level*/)
                                integrator.tolerance != old_integrator.tolerance ||
                                integrator.step != old_integrator.step;
   if (physics_changed) {
+    bool switched = false;
     try {
-      simulator_->update(top, integrator);  // validates; changes nothing if it throws
+      switched = simulator_->update(top, integrator);  // validates; changes nothing if it throws
     } catch (const InvalidParameter& error) {
       return refuse(error.what());
     }
     rebaseline_energy();
+    // auto chose again for the current state (exact may refuse it now, or accept it again).
+    if (switched)
+      ROS_WARN("spinning_top: the update switched the integrator at t = %.9g s: now %s", simulator_->time(),
+               simulator_->integrator_description().c_str());
   }
   if (config.rate != settings_.rate || config.real_time_factor != settings_.real_time_factor) {
     // Re-anchor so that the next tick is exactly one new period after the last one.
@@ -521,7 +530,8 @@ void SpinningTopNode::reconfigure(SpinningTopConfig& config, uint32_t /*level*/)
 }
 
 bool SpinningTopNode::on_reset(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& response) {
-  simulator_->reset();
+  if (simulator_->reset())  // auto chose again for the initial state
+    ROS_WARN("spinning_top: the reset switched the integrator: now %s", simulator_->integrator_description().c_str());
   // Simulated time restarts at 0, stamps do not: the origin moves to the last stamp, so
   // tf2 listeners see time go on (no jump back, no dropped buffers).
   stamp_origin_ = last_stamp_;

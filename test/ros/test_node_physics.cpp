@@ -1,6 +1,8 @@
 // rostest (test/node_physics.test): the node's tf, topics and services against the physics.
-// Three nodes run: /spinning_top (fixed tip, theta0 = 0.3, 500 Hz), /sleeping (theta0 = 0) and
-// /exact (the default scene with integrator: exact, 200 Hz).
+// Four nodes run: /spinning_top (fixed tip, theta0 = 0.3, 500 Hz), /sleeping (theta0 = 0),
+// /exact (the default scene with integrator: exact, 200 Hz) and /vertical (theta0 = 0 with
+// thetadot0 = 1 rad/s, 200 Hz: exact refuses it, auto runs dop853).
+#include <diagnostic_msgs/DiagnosticArray.h>
 #include <dynamic_reconfigure/DoubleParameter.h>
 #include <dynamic_reconfigure/Reconfigure.h>
 #include <geometry_msgs/PointStamped.h>
@@ -138,6 +140,39 @@ TEST(Node, ExactIntegratorNutatesBetweenTheRootsOfTheCubic) {
   // It moves through the band rather than sitting at its start.
   EXPECT_LT(lowest, theta0 + 0.2 * width);
   EXPECT_GT(highest, theta1 - 0.2 * width);
+}
+
+// Diagnostics say what runs and why: auto runs exact on the shipped scene, and dop853 with
+// exact's refusal where exact cannot start (an axis vertical while it moves).
+TEST(Node, DiagnosticsSayWhichIntegratorAutoRunsAndWhy) {
+  ros::NodeHandle nh;
+  Recorder<diagnostic_msgs::DiagnosticArray> diagnostics(nh, "/diagnostics");
+  // The value of a key in the latest status of that name ("" until one arrives).
+  auto value_of = [&](const std::string& status_name, const std::string& key) {
+    std::string value;
+    for (const auto& array : diagnostics.messages())
+      for (const auto& status : array.status)
+        if (status.name == status_name)
+          for (const auto& entry : status.values)
+            if (entry.key == key) value = entry.value;
+    return value;
+  };
+  ASSERT_TRUE(wait_for(
+      [&] {
+        return !value_of("spinning_top: simulation", "integrator").empty() &&
+               !value_of("vertical: simulation", "integrator").empty();
+      },
+      10.0))
+      << "no diagnostics from /spinning_top and /vertical";
+  const std::string shipped = value_of("spinning_top: simulation", "integrator");
+  EXPECT_EQ(shipped.rfind("auto: exact: quadrature", 0), 0u) << shipped;
+  EXPECT_EQ(value_of("spinning_top: simulation", "integrator method"), "exact");
+  EXPECT_EQ(value_of("spinning_top: simulation", "integrator fallback reason"), "");
+  const std::string vertical = value_of("vertical: simulation", "integrator");
+  EXPECT_EQ(vertical.rfind("auto: dop853, tolerance 1e-12 (exact refused: ", 0), 0u) << vertical;
+  EXPECT_EQ(value_of("vertical: simulation", "integrator method"), "dop853");
+  EXPECT_NE(value_of("vertical: simulation", "integrator fallback reason").find("vertical while it moves"),
+            std::string::npos);
 }
 
 // Each tick advances exactly 1/rate of simulated time, however long it took: consecutive
