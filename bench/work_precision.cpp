@@ -31,6 +31,7 @@
 #include <vector>
 
 #include "reference_solution.hpp"
+#include "spinning_top/integrator_registry.hpp"
 #include "spinning_top/simulator.hpp"
 #include "spinning_top/scenes/fixed_tip.hpp"
 #include "spinning_top/scenes/frictionless.hpp"
@@ -294,13 +295,21 @@ std::unique_ptr<Simulator> simulator_or_null(const SceneConfig& c) {
   }
 }
 
-const std::vector<IntegratorType> kOurIntegrators = {
-    IntegratorType::kRk4,        IntegratorType::kDopri5,      IntegratorType::kDop853,
-    IntegratorType::kSplitting4, IntegratorType::kSplitting6,  IntegratorType::kSplitting8,
-    IntegratorType::kGauss6,     IntegratorType::kRadau5,      IntegratorType::kRodas4,
-    IntegratorType::kExact};
+/// Every method of the registry (auto, which runs one of them, is measured separately).
+std::vector<IntegratorType> our_integrators() {
+  std::vector<IntegratorType> types;
+  for (const IntegratorInfo& row : integrator_registry())
+    if (row.kind != IntegratorKind::kAutomatic) types.push_back(row.type);
+  return types;
+}
 
-bool is_adaptive(const SceneConfig& c, IntegratorType type) { return std::isinf(largest_fixed_step(c, type)); }
+IntegratorKind kind_of(IntegratorType type) { return integrator_info(type).kind; }
+
+/// auto's series name: the method it ran, e.g. "auto (exact)" or "auto (dop853)" (a CSV field: no commas).
+std::string auto_name(const Simulator& sim) {
+  const IntegratorChoice choice = sim.integrator_choice();
+  return "auto (" + std::string(to_string(choice.method)) + (choice.fallback ? " fallback" : "") + ")";
+}
 
 struct Options {
   std::string output_dir = ".";
@@ -334,12 +343,12 @@ void run_scene(const Scene& scene, Reference& ref, const Options& opt, std::vect
   const double sample_interval = 1e-3;
 
   // --- ours, through the front ends' interface ---
-  for (const IntegratorType type : kOurIntegrators) {
+  for (const IntegratorType type : our_integrators()) {
     SceneConfig c = base;
     c.integrator.type = type;
-    // exact has neither step nor tolerance: one point (its cost does not depend on the accuracy).
-    const bool closed_form = type == IntegratorType::kExact;
-    const bool adaptive = is_adaptive(c, type);
+    // A closed form (exact) has neither step nor tolerance: one point (its cost does not depend on the accuracy).
+    const bool closed_form = kind_of(type) == IntegratorKind::kClosedForm;
+    const bool adaptive = kind_of(type) == IntegratorKind::kAdaptive;
     const std::vector<double> params =
         closed_form ? std::vector<double>{0.0} : adaptive ? tolerances(opt.quick) : fixed_steps(opt.quick);
     for (const double p : params) {
@@ -498,7 +507,7 @@ void dense_sampling(const Scene& scene, Reference& ref, const Options& opt, std:
     IntegratorType type;
     std::string setting;
   };
-  for (const Ours& o : {Ours{IntegratorType::kExact, "closed form"}, Ours{IntegratorType::kAuto, "defaults (step 1e-3)"},
+  for (const Ours& o : {Ours{IntegratorType::kExact, "closed form"}, Ours{IntegratorType::kAuto, "defaults"},
                         Ours{IntegratorType::kDop853, "tolerance 1e-10"}}) {
     SceneConfig c = base;
     c.integrator.type = o.type;
@@ -519,8 +528,7 @@ void dense_sampling(const Scene& scene, Reference& ref, const Options& opt, std:
       const RefSample r = ref.at(i * interval);
       err.add(s.attitude * Vector3::UnitZ(), r.axis, 0.0, 0.0, 0.0);
     }
-    std::string name = o.type == IntegratorType::kAuto ? "auto (" + sim->integrator_description() + ")" : to_string(o.type);
-    std::replace(name.begin(), name.end(), ',', ';');
+    const std::string name = o.type == IntegratorType::kAuto ? auto_name(*sim) : to_string(o.type);
     rows.push_back({scene.name, "ours", name, o.setting, cpu, err.attitude, n});
   }
   using Sys = OdeintSystem<Model>;
@@ -575,7 +583,7 @@ void long_runs(const Scene& scene, const Options& opt, std::ofstream& csv) {
                    double err) {
     csv << scene.name << "," << family << "," << method << "," << setting << "," << t << "," << err << "\n";
   };
-  std::vector<IntegratorType> types = kOurIntegrators;
+  std::vector<IntegratorType> types = our_integrators();
   types.push_back(IntegratorType::kAuto);
   for (const IntegratorType type : types) {
     SceneConfig c = base;
@@ -584,12 +592,12 @@ void long_runs(const Scene& scene, const Options& opt, std::ofstream& csv) {
     c.integrator.tolerance = tol;
     const std::unique_ptr<Simulator> sim = simulator_or_null(c);
     if (!sim) continue;  // this method is not offered for this scene, or not at this step
-    const std::string setting = type == IntegratorType::kAuto    ? "defaults"
-                                : type == IntegratorType::kExact ? "closed form"
-                                : is_adaptive(c, type)           ? "tolerance 1e-10"
-                                                                 : "step 1e-3";
-    std::string name = type == IntegratorType::kAuto ? "auto (" + sim->integrator_description() + ")" : to_string(type);
-    std::replace(name.begin(), name.end(), ',', ';');  // a CSV field
+    const IntegratorKind kind = kind_of(type);
+    const std::string setting = kind == IntegratorKind::kAutomatic    ? "defaults"
+                                : kind == IntegratorKind::kClosedForm ? "closed form"
+                                : kind == IntegratorKind::kAdaptive   ? "tolerance 1e-10"
+                                                                      : "step 1e-3";
+    const std::string name = type == IntegratorType::kAuto ? auto_name(*sim) : to_string(type);
     for (long i = 1; i <= samples; ++i) {
       const double t = horizon * i / samples;
       if (i % 20 == 1) progress(scene.name + ": long run " + to_string(type) + " t " + number(t));

@@ -21,7 +21,7 @@ if [ "$(id -u)" -eq 0 ]; then "$SPINNING_TOP_ROOT/scripts/setup.sh" --bench; fi
 echo "bench.sh: building the benchmarks in $SPINNING_TOP_BUILD (Release)"
 cmake -S "$SPINNING_TOP_ROOT" -B "$SPINNING_TOP_BUILD" \
   -DPYTHON_EXECUTABLE=/usr/bin/python3 -DCMAKE_BUILD_TYPE="${CMAKE_BUILD_TYPE:-Release}" >/dev/null
-targets=(work_precision)
+targets=(work_precision fallback_tolerance)
 grep -q "add_executable(extreme_cases" "$SPINNING_TOP_ROOT/bench/CMakeLists.txt" && targets+=(extreme_cases)
 cmake --build "$SPINNING_TOP_BUILD" --target "${targets[@]}" -- -j"$(nproc)"
 
@@ -31,6 +31,9 @@ mkdir -p "$results"
 
 echo "bench.sh: work-precision benchmark (progress below)"
 "$bin/work_precision" --output-dir "$results" "${quick[@]}"
+
+echo "bench.sh: auto's fallback tolerance (dop853 against exact)"
+"$bin/fallback_tolerance" --output-dir "$results"
 
 if [ -x "$bin/extreme_cases" ]; then
   echo "bench.sh: extreme cases"
