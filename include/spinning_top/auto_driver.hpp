@@ -51,7 +51,8 @@ class AutoDriver {
   explicit AutoDriver(const SceneConfig& config) : plan_(auto_plan(config)) {}
 
   /// (Re)starts at (t, y) with the plan's first choice, or with its fallback if the first refuses
-  /// this state. Throws the refusal if there is no fallback (auto has none that can refuse).
+  /// this state (InvalidParameter "integrator"). A plan without fallback (viscous: its methods
+  /// refuse no state) lets a refusal through, as does any other exception.
   void reset(const Model& model, double t, const State& y) {
     try {
       start(plan_.first, model, t, y);
