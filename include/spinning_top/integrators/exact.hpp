@@ -352,11 +352,26 @@ class ExactSolution {
   /// Torque-free symmetric top with G fixed (transverse moment A'): L is fixed in the world,
   /// the body turns about it at |L|/A' and about its own axis at nu = (A' - C) wZ / A' (Landau
   /// & Lifshitz, sec. 33): q(t) = exp(t L_world / A') q0 exp(t nu e_Z); omega_perp turns by
-  /// -nu t in the body. (R = m g and e_Zz > 0 stay as they are: no event.)
+  /// -nu t in the body. R = m g never changes sign; the axis may reach the floor on its cone:
+  /// e_Zz(t) = A + rho cos(w t - delta) (Rodrigues' rotation of e_Z about L), which falls
+  /// through 0 first at w t = delta + acos(-A / rho) (mod 2 pi).
   void init_free_rotation() {
     kind_ = Kind::kFreeRotation;
     momentum_world_ = q0_ * Vector3(transverse_ * wx0_, transverse_ * wy0_, axial_ * spin_);
     body_rate_ = (transverse_ - axial_) * spin_ / transverse_;
+    const double momentum = momentum_world_.norm();
+    if (!(momentum > 0.0)) return;  // at rest: nothing moves
+    const double rate = momentum / transverse_;
+    const Vector3 n = momentum_world_ / momentum, axis = q0_ * Vector3::UnitZ();
+    const double a = axis.dot(n) * n.z(), b = axis.z() - a, c = n.cross(axis).z();
+    const double rho = std::hypot(b, c);
+    if (!(a - rho <= 0.0) || rho == 0.0) return;  // the cone stays above the floor
+    const double two_pi = 2.0 * exact_detail::kPi;
+    double phase = std::atan2(c, b) + std::acos(std::clamp(-a / rho, -1.0, 1.0));
+    phase = std::fmod(phase, two_pi);
+    if (phase < 0.0) phase += two_pi;
+    event_ = Event::kFallen;
+    event_time_ = t0_ + phase / rate;
   }
 
   Motion free_rotation(double dt) const {
