@@ -12,6 +12,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <vector>
 
 namespace spinning_top {
@@ -37,7 +38,9 @@ class PiecewiseChebyshev {
     width_ = span_ / pieces_;
     inverse_width_ = pieces_ / span_;
     built_.assign(pieces_, 0);
-    coefficients_.assign(static_cast<std::size_t>(pieces_) * kCoefficients, Values{});
+    // Not zeroed: a piece is written whole before it is marked built (thousands of pieces of a
+    // hard motion would otherwise cost a megabyte of stores at every start).
+    coefficients_.reset(new Values[static_cast<std::size_t>(pieces_) * kCoefficients]);
   }
 
   double span() const { return span_; }
@@ -133,7 +136,7 @@ class PiecewiseChebyshev {
   double span_ = 0.0, width_ = 0.0, inverse_width_ = 0.0;
   int pieces_ = 0;
   std::vector<unsigned char> built_;
-  std::vector<Values> coefficients_;
+  std::unique_ptr<Values[]> coefficients_;
 };
 
 }  // namespace spinning_top

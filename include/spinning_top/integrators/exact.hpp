@@ -99,19 +99,21 @@ constexpr double kEpsilon = std::numeric_limits<double>::epsilon();
 /// Largest number of samples per half period of the series (beyond: refused).
 constexpr int kMaxSamples = 1 << 14;
 
-/// Three series sharing the argument x: sum_k c[k][i] sin((k+1) x), by Clenshaw's recurrence
+/// N series sharing the argument x: sum_k c[k][i] sin((k+1) x), by Clenshaw's recurrence
 /// b_k = c_k + 2 cos(x) b_{k+1} - b_{k+2}, sum = b_1 sin(x).
-inline std::array<double, 3> sine_sums(const std::vector<std::array<double, 3>>& c, double cos_x, double sin_x) {
-  double b1[3] = {0.0, 0.0, 0.0}, b2[3] = {0.0, 0.0, 0.0};
+template <std::size_t N>
+std::array<double, N> sine_sums(const std::vector<std::array<double, N>>& c, double cos_x, double sin_x) {
+  std::array<double, N> b1{}, b2{};
   const double two_cos = 2.0 * cos_x;
   for (std::size_t k = c.size(); k-- > 0;) {
-    for (int i = 0; i < 3; ++i) {
+    for (std::size_t i = 0; i < N; ++i) {
       const double b0 = c[k][i] + two_cos * b1[i] - b2[i];
       b2[i] = b1[i];
       b1[i] = b0;
     }
   }
-  return {b1[0] * sin_x, b1[1] * sin_x, b1[2] * sin_x};
+  for (std::size_t i = 0; i < N; ++i) b1[i] *= sin_x;
+  return b1;
 }
 
 /// sum_k c[k] cos((k+1) x) by Clenshaw: b_1 cos(x) - b_2.
@@ -136,10 +138,16 @@ inline void fft(std::vector<double>& re, std::vector<double>& im) {
     j ^= bit;
     if (i < j) std::swap(re[i], re[j]), std::swap(im[i], im[j]);
   }
-  std::vector<double> cosine(n / 2), sine(n / 2);  // e^{-2 pi i k / n}, each from its own cos, sin
-  for (std::size_t k = 0; k < n / 2; ++k) {
-    cosine[k] = std::cos(2.0 * kPi * k / n);
-    sine[k] = -std::sin(2.0 * kPi * k / n);
+  // e^{-2 pi i k / n}, each from its own cos and sin, kept for the next transform of this size
+  // (the series double their size until converged, and every start repeats the sizes).
+  static thread_local std::vector<double> cosine, sine;
+  if (cosine.size() != n / 2) {
+    cosine.resize(n / 2);
+    sine.resize(n / 2);
+    for (std::size_t k = 0; k < n / 2; ++k) {
+      cosine[k] = std::cos(2.0 * kPi * k / n);
+      sine[k] = -std::sin(2.0 * kPi * k / n);
+    }
   }
   for (std::size_t length = 2; length <= n; length <<= 1) {
     const std::size_t half = length / 2, stride = n / length;
@@ -308,7 +316,7 @@ class ExactSolution {
   double turning_point_low() const { return u0_ + v1_; }
   double turning_point_high() const { return u0_ + v2_; }
   /// Fourier terms per series in w (what the start computed; requests do not sum them).
-  int terms() const { return static_cast<int>(sine_.size()); }
+  int terms() const { return static_cast<int>(std::max(angle_sine_.size(), time_sine_.size())); }
   /// Samples per half period the series needed (a cost measure).
   int samples() const { return samples_; }
   /// The first time after the start at which the motion leaves the model's validity, and
@@ -319,7 +327,7 @@ class ExactSolution {
   /// Period factors of the quadrature: alpha(t + T) = alpha_turn * alpha(t), beta likewise.
   Complex alpha_turn() const { return alpha_turn_; }
   Complex beta_turn() const { return beta_turn_; }
-  /// A bound of |Omega| over the motion (the scale of the body rates).
+  /// A bound of |omega| over the motion (the scale of the body rates and of their round-off).
   double rate_scale() const { return rate_scale_; }
 
   /// The motion at time t, from the closed form.
@@ -432,7 +440,9 @@ class ExactSolution {
     sign_down_ = p_down >= 0.0 ? 1.0 : -1.0;
     pole_up_ = sign_up_ * std::sqrt(one_minus_u1_ * one_minus_u2_);
     pole_down_ = sign_down_ * std::sqrt(one_plus_u1_ * one_plus_u2_);
-    rate_scale_ = std::sqrt(std::max(k_energy - kappa_ * v1_, 0.0)) + std::abs(spin_) * 1e-300;
+    // |omega| bounds |Omega| (K(u1) = omega_perp^2 + alpha_D udot^2 at the lowest point) and sets
+    // the round-off of Omega = (2 betadot + i wZ beta)/alpha, whose terms are ~ |omega| each.
+    rate_scale_ = std::sqrt(std::max(k_energy - kappa_ * v1_, 0.0) + spin_ * spin_) + 1e-300;
     build_series();
     // The start's phase w0 in [0, 2K): sn^2 = (u0 - u1)/(u2 - u1), cn^2 = (u2 - u0)/(u2 - u1),
     // dn^2 = (u3 - u0)/(u3 - u1), from the roots without cancellation; u rises on (0, K).
@@ -698,21 +708,24 @@ class ExactSolution {
       if (!converged) continue;
       samples_ = n;
       for (int i = 0; i < 3; ++i) mean_[i] = a[i][0];
-      // Drop the trailing coefficients below round-off of every series.
-      int last = n;
-      while (last > 0 && std::abs(a[0][last]) <= 0.5 * kEpsilon * scale[0] &&
-             std::abs(a[1][last]) <= 0.5 * kEpsilon * scale[1] && std::abs(a[2][last]) <= 0.5 * kEpsilon * scale[2])
-        --last;
       if (alpha_d_ == 0.0) {
         mean_[0] = 2.0 / mu_;  // fixed tip: dt/dw = 2/mu exactly
         for (int k = 1; k <= n; ++k) a[0][k] = 0.0;
       }
-      sine_.assign(last, {0.0, 0.0, 0.0});
-      time_rate_cosine_.assign(last, 0.0);
-      for (int k = 1; k <= last; ++k) {
+      // Drop the trailing coefficients below round-off: the time's series apart from the
+      // angles' (Newton's method on t(w) sums only the former).
+      int last_time = n, last_angle = n;
+      while (last_time > 0 && std::abs(a[0][last_time]) <= 0.5 * kEpsilon * scale[0]) --last_time;
+      while (last_angle > 0 && std::abs(a[1][last_angle]) <= 0.5 * kEpsilon * scale[1] &&
+             std::abs(a[2][last_angle]) <= 0.5 * kEpsilon * scale[2])
+        --last_angle;
+      time_sine_.assign(last_time, {0.0});
+      time_rate_cosine_.assign(last_time, 0.0);
+      angle_sine_.assign(last_angle, {0.0, 0.0});
+      for (int k = 1; k <= n; ++k) {
         const double integral = quarter / (exact_detail::kPi * k);
-        for (int i = 0; i < 3; ++i) sine_[k - 1][i] = a[i][k] * integral;
-        time_rate_cosine_[k - 1] = a[0][k];
+        if (k <= last_time) time_sine_[k - 1][0] = a[0][k] * integral, time_rate_cosine_[k - 1] = a[0][k];
+        if (k <= last_angle) angle_sine_[k - 1] = {a[1][k] * integral, a[2][k] * integral};
       }
       return;
     }
@@ -730,12 +743,17 @@ class ExactSolution {
     const double turns = std::floor(w / (2.0 * quarter));
     const double r = std::fma(-turns, 2.0 * quarter, w);
     const double x = exact_detail::kPi * r / quarter;
-    const std::array<double, 3> periodic = exact_detail::sine_sums(sine_, std::cos(x), std::sin(x));
-    return {mean_[0] * w + periodic[0], mean_[1] * w + periodic[1], mean_[2] * w + periodic[2]};
+    const double cos_x = std::cos(x), sin_x = std::sin(x);
+    const std::array<double, 1> time = exact_detail::sine_sums(time_sine_, cos_x, sin_x);
+    const std::array<double, 2> angles = exact_detail::sine_sums(angle_sine_, cos_x, sin_x);
+    return {mean_[0] * w + time[0], mean_[1] * w + angles[0], mean_[2] * w + angles[1]};
   }
   double time_of_phase(double w) const {
     if (alpha_d_ == 0.0) return mean_[0] * w;
-    return integrals(w)[0];
+    const double quarter = modulus_.quarter_period();
+    const double turns = std::floor(w / (2.0 * quarter));
+    const double x = exact_detail::kPi * std::fma(-turns, 2.0 * quarter, w) / quarter;
+    return mean_[0] * w + exact_detail::sine_sums(time_sine_, std::cos(x), std::sin(x))[0];
   }
 
   /// The phase w at time t: t(w) = t0 + T(w) - T(w0), linear for the fixed tip, else Newton's
@@ -752,7 +770,7 @@ class ExactSolution {
       const double r = std::fma(-turns, 2.0 * quarter, w);
       const double x = exact_detail::kPi * r / quarter;
       const double cos_x = std::cos(x), sin_x = std::sin(x);
-      const double periodic = exact_detail::sine_sums(sine_, cos_x, sin_x)[0];
+      const double periodic = exact_detail::sine_sums(time_sine_, cos_x, sin_x)[0];
       const double rate = mean_[0] + exact_detail::cosine_sum(time_rate_cosine_, cos_x);
       const double step = (mean_[0] * w + periodic - target) / rate;
       w -= step;
@@ -772,8 +790,8 @@ class ExactSolution {
     const Phase ph = phase_values(j);
     const std::array<double, 3> rates = integrands(ph);
     const double x = exact_detail::kPi * r / quarter;
-    const std::array<double, 3> periodic = exact_detail::sine_sums(sine_, std::cos(x), std::sin(x));
-    const double a = mean_[1] * w + periodic[1], b = mean_[2] * w + periodic[2];
+    const std::array<double, 2> periodic = exact_detail::sine_sums(angle_sine_, std::cos(x), std::sin(x));
+    const double a = mean_[1] * w + periodic[0], b = mean_[2] * w + periodic[1];
     const double root_down1 = std::sqrt(one_plus_u1_), root_down2 = std::sqrt(one_plus_u2_);
     const double root_up1 = std::sqrt(one_minus_u1_), root_up2 = std::sqrt(one_minus_u2_);
     const Complex g(root_down1 * ph.cn, sign_down_ * root_down2 * ph.sn);
@@ -867,8 +885,9 @@ class ExactSolution {
   double sign_up_ = 1.0, sign_down_ = 1.0, pole_up_ = 0.0, pole_down_ = 0.0;
   elliptic::JacobiModulus modulus_;
   std::array<double, 3> mean_ = {0.0, 0.0, 0.0};
-  std::vector<std::array<double, 3>> sine_;
-  std::vector<double> time_rate_cosine_;
+  std::vector<std::array<double, 1>> time_sine_;   // t(w): sine coefficients (frictionless only)
+  std::vector<double> time_rate_cosine_;            // dt/dw: cosine coefficients
+  std::vector<std::array<double, 2>> angle_sine_;   // a_r(w), b_r(w)
   int samples_ = 0;
   double w0_ = 0.0, time_of_w0_ = 0.0, period_ = 0.0;
   Complex alpha_turn_{1.0, 0.0}, beta_turn_{1.0, 0.0};
@@ -939,12 +958,11 @@ class ExactDriver : public DriverBase<Model> {
       this->y_out_ = event_state_;
       return this->event_ = pending_;
     }
-    // Finite by construction: the interpolation's coefficients are checked when a piece is
-    // built (build_piece(), which otherwise leaves the request to the closed form), and the
-    // period factors have modulus 1.
+    // The interpolation is finite by construction (a piece's coefficients are checked when it is
+    // built, and the period factors have modulus 1); the closed form itself is checked.
     this->y_out_ = state_at(t_target);
     ++this->steps_;
-    if (interpolation_failed_ && !all_finite(this->y_out_)) return this->event_ = Event::kNonFinite;
+    if (answered_directly_ && !all_finite(this->y_out_)) return this->event_ = Event::kNonFinite;
     this->t_out_ = t_target;
     return Event::kNone;
   }
@@ -952,7 +970,8 @@ class ExactDriver : public DriverBase<Model> {
   /// The state at t >= the start, from the interpolation table (or the closed form directly
   /// for the equilibrium and the free rotation, which are cheap).
   State state_at(double t) {
-    if (solution_.kind() != Solution::Kind::kQuadrature) return solution_.at(t);
+    answered_directly_ = solution_.kind() != Solution::Kind::kQuadrature;
+    if (answered_directly_) return solution_.at(t);
     const double elapsed = t - solution_.start_time();
     double turns = 0.0, r = elapsed;
     if (periodic_) {
@@ -964,7 +983,10 @@ class ExactDriver : public DriverBase<Model> {
       if (r < 0.0) turns -= 1.0, r += span;  // the rounded quotient may be one off
       if (r >= span) turns += 1.0, r -= span;
     }
-    if (!table_.built(table_.piece_of(r)) && !build_piece(r)) return solution_.at(t);
+    if (!table_.built(table_.piece_of(r)) && !build_piece(r)) {
+      answered_directly_ = true;
+      return solution_.at(t);
+    }
     const std::array<double, 6> v = table_.evaluate(r);
     State y;
     if (turns == 0.0) {
@@ -998,6 +1020,9 @@ class ExactDriver : public DriverBase<Model> {
   /// The last Chebyshev coefficients of a piece must be at the closed form's own round-off
   /// (measured ~1e-15 of the scale: alpha, beta ~ 1, Omega ~ rate_scale()).
   static constexpr double kTailTolerance = 32.0 * exact_detail::kEpsilon;
+  /// A bound on the table (6 kB per piece); a span that needs more is interpolated less
+  /// accurately rather than without bound in memory and time.
+  static constexpr int kMaxPieces = 1 << 12;
   using Table = PiecewiseChebyshev<6, kDegree>;
 
   bool same_model(const Model& model) const {
@@ -1022,35 +1047,43 @@ class ExactDriver : public DriverBase<Model> {
     const double event_span = solution_.first_event_time() - solution_.start_time();
     periodic_ = !(event_span < solution_.nutation_period());
     const double span = periodic_ ? solution_.nutation_period() : std::max(event_span, 1e-300);
-    // Few pieces to start with; build_piece() halves them where the interpolation needs it.
-    table_.assign(span, 4);
+    // Pieces for the phase the interpolated functions turn through in the span: a Chebyshev
+    // series of degree 13 resolves e^{i x} to round-off for |x| <= ~1 rad on [-1, 1] (its
+    // coefficients are Bessel functions, J_13(1) ~ 1e-17). The phase per period is that of the
+    // nutation's harmonics (2 pi per Fourier term in w) and the period factors' turns.
+    const double fraction = span / solution_.nutation_period();
+    const double phase = fraction * (2.0 * exact_detail::kPi * (solution_.terms() + 1) +
+                                     std::abs(std::arg(solution_.alpha_turn())) + std::abs(std::arg(solution_.beta_turn())));
+    int pieces = 4;
+    while (pieces < phase && pieces < kMaxPieces) pieces *= 2;
+    table_.assign(span, pieces);
     inverse_span_ = 1.0 / span;
     interpolation_failed_ = false;
     scale_ = {1.0, 1.0, 1.0, 1.0, solution_.rate_scale(), solution_.rate_scale()};
   }
 
-  /// Interpolates the piece; if its last coefficients are not at round-off, the pieces are
-  /// halved (every built piece is forgotten and rebuilt on demand). False if the closed form
-  /// is not finite there (the request is then answered by the closed form itself).
+  /// Interpolates the piece of r. False if the request must be answered by the closed form
+  /// itself: the closed form is not finite there, or the piece's last coefficients are not at
+  /// round-off, in which case the pieces are halved (every built piece is forgotten and built
+  /// again on demand). One piece per request at most, so that a request's cost is bounded by
+  /// one piece (14 closed-form evaluations) and one evaluation.
   bool build_piece(double r) {
     const double start = solution_.start_time();
-    const double span = table_.span();
-    for (;;) {
-      const int piece = table_.piece_of(r);
-      auto values = [&](double r) {
-        const typename Solution::Motion m = solution_.motion(start + r);
-        return std::array<double, 6>{m.alpha.real(), m.alpha.imag(), m.beta.real(), m.beta.imag(), m.omega.real(),
-                                     m.omega.imag()};
-      };
-      const double tail = table_.build(piece, values, scale_);
-      if (!std::isfinite(tail)) {
-        table_.forget(piece);
-        interpolation_failed_ = true;
-        return false;
-      }
-      if (tail <= kTailTolerance || table_.pieces() >= (1 << 16)) return true;
-      table_.assign(span, 2 * table_.pieces());
+    auto values = [&](double time) {
+      const typename Solution::Motion m = solution_.motion(start + time);
+      return std::array<double, 6>{m.alpha.real(), m.alpha.imag(), m.beta.real(), m.beta.imag(), m.omega.real(),
+                                   m.omega.imag()};
+    };
+    const int piece = table_.piece_of(r);
+    const double tail = table_.build(piece, values, scale_);
+    if (!std::isfinite(tail)) {
+      table_.forget(piece);
+      interpolation_failed_ = true;
+      return false;
     }
+    if (tail <= kTailTolerance || table_.pieces() >= kMaxPieces) return true;
+    table_.assign(table_.span(), 2 * table_.pieces());
+    return false;
   }
 
   /// The event from the closed form; the state reported with it is the last valid one (the
@@ -1074,7 +1107,7 @@ class ExactDriver : public DriverBase<Model> {
   Solution solution_;
   Table table_;
   std::array<double, 6> scale_{};
-  bool periodic_ = true, interpolation_failed_ = false;
+  bool periodic_ = true, interpolation_failed_ = false, answered_directly_ = false;
   double inverse_span_ = 0.0;
   long period_index_ = std::numeric_limits<long>::min();
   Complex alpha_factor_{1.0, 0.0}, beta_factor_{1.0, 0.0}, omega_factor_{1.0, 0.0};
