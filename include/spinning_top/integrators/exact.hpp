@@ -1,45 +1,79 @@
 // "Integrator" exact: the closed-form solution of the two integrable scenes (fixed tip =
 // Lagrange top, frictionless top), evaluated at any requested time from constants of motion
-// computed once per (re)start. No time step: the cost of a request does not depend on how far
-// it lies from the previous one.
+// computed once per (re)start. No time step.
 //
-// With u = cos(theta) and the z-x-z Euler angles of PHYSICS.md (q = Rz(phi) Rx(theta) Rz(psi)),
-// the energy and the two conserved momenta give (PHYSICS.md, "Invariants"; Goldstein, Classical
-// Mechanics, 3rd ed., sec. 5.7; Landau & Lifshitz, Mechanics, sec. 35, problem 1)
-//   udot^2 D(u) = f(u) = (2/A')(E' - m g h u)(1 - u^2) - ((L_z - C wZ u)/A')^2,
-//   phidot = (L_z - C wZ u) / (A' (1 - u^2)),   psidot = wZ - phidot u,
-// A' = A0, D = 1 (fixed tip); A' = A, D = 1 + (m h^2/A)(1 - u^2) (frictionless), and
-// f = kappa (u - u1)(u2 - u)(u3 - u), kappa = 2 m g h / A', u1 <= u <= u2 <= 1 <= u3.
-// The substitution u = u2 - (u2 - u1) sin^2(s) (as in bench/reference_solution.hpp) gives
-//   dt/ds = 2 sqrt(D(u) / (kappa (u3 - u))),  dphi/ds = phidot dt/ds,  dpsi/ds = psidot dt/ds,
-// analytic, even and pi-periodic in s. Their cosine series (trapezoidal rule = DCT-I, exact to
-// round-off once the coefficients have decayed) give t(s), phi(s), psi(s) as secular term plus
-// sine series; inverting t(s) on a grid gives s, phi, psi as functions of time, again secular
-// term plus sine series in 2 pi t / T (T the nutation period). One evaluation is then one
-// Clenshaw sum of three series and four sin/cos pairs; theta, thetadot, phidot, psidot and the
-// body rates follow in closed form:
-//   omega_X = phidot sin(theta) sin(psi) + thetadot cos(psi),
-//   omega_Y = phidot sin(theta) cos(psi) - thetadot sin(psi)      (PHYSICS.md, initial state).
+// 1. The nutation. With u = cos(theta) = e_Zz, energy and the two conserved momenta give
+// (PHYSICS.md, "Invariants"; Goldstein, Classical Mechanics, 3rd ed., sec. 5.7)
+//   udot^2 D(u) = f(u) = (2/A')(E' - m g h u)(1 - u^2) - p(u)^2,   p(u) = (L_z - C wZ u) / A',
+// A' = A0, D = 1 (fixed tip); A' = A, D = 1 + (m h^2/A)(1 - u^2) (frictionless); f is the cubic
+// kappa (u - u1)(u2 - u)(u3 - u), kappa = 2 m g h / A', u1 <= u <= u2 <= 1 <= u3. Jacobi's
+// substitution u = u1 + (u2 - u1) sn^2(w, k), k^2 = (u2 - u1)/(u3 - u1), turns it into
+//   dt/dw = 2 sqrt(D(u)) / mu,   mu^2 = kappa (u3 - u1)
+// (Whittaker, Analytical Dynamics, sec. 72; constant for the fixed tip, so there t is linear in w).
+// w is the uniformizing variable of the motion: every quantity below is analytic in a strip of
+// half-width K' about the real w axis whatever the state, in particular near the separatrix
+// (k -> 1: a slow top released near the vertical, an unstable sleeping top), where the
+// trigonometric parameter u = u2 - (u2 - u1) sin^2(s) of the earlier version had a branch point
+// at distance sqrt((u3 - u2)/(u2 - u1)) from the real s axis.
 //
-// The cubic is written about the current state, v = u - u0 (Taylor coefficients from the state,
-// f(0) = udot0^2 D(u0) >= 0), so a start at a turning point deflates exactly (udot0 = 0 gives
-// f(0) = 0: a numerical root a few ulp off would shift the phase by sqrt(ulp / (u2 - u1))), and
-// the phase s0 comes from both u0 and udot0 by atan2, well conditioned everywhere.
+// 2. The attitude, without Euler angles. Write q = (w, x, y, z) as the Cayley-Klein pair
+// alpha = w + i z, beta = x + i y (|alpha|^2 = (1 + u)/2, |beta|^2 = (1 - u)/2). The kinematics
+// qdot = q (0, omega)/2 read (Omega = omega_X + i omega_Y)
+//   alphadot = (i wZ alpha - beta conj(Omega))/2,   betadot = (alpha Omega - i wZ beta)/2,
+// and with the z-x-z angles alpha = cos(theta/2) e^{i a}, beta = sin(theta/2) e^{i b},
+// a = (phi + psi)/2, b = (phi - psi)/2:
+//   adot = (wZ + p/(1 + u))/2,   bdot = (p/(1 - u) - wZ)/2.
+// bdot has a pole where u = 1 (a zero of 1 - u(w) at complex w, near the real axis when the axis
+// passes near the vertical): that is the Euler-angle singularity, and why the Fourier series
+// of phi and psi need arbitrarily many terms there. It is removed in closed form: on the real
+// axis 1 - u = (1 - u1) cn^2 + (1 - u2) sn^2 = |F(w)|^2 with the entire function
+//   F(w) = sqrt(1 - u1) cn(w) + i s+ sqrt(1 - u2) sn(w),   s+ = sign(p(1)),
+// whose phase has exactly the pole part of b (its residue is that of b, i/2, at the zero of
+// F; matching it fixes s+), so that
+//   beta = e^{i b_r(w)} F(w) / sqrt(2),   db_r/dw = db/dw - d arg F/dw = analytic,
+// and the same at u = -1 with G(w) = sqrt(1 + u1) cn + i s- sqrt(1 + u2) sn for alpha. The
+// analytic remainders, written without cancellation (p(u) - p(1) = c (1 - u), D - 1 = alpha_D
+// (1 - u^2), dn = sqrt((u3 - u)/(u3 - u1))):
+//   db_r/dw = [p alpha_D (1 + u)/(sqrt D + 1) + c]/mu - s+ sqrt((1-u1)(1-u2)) kappa /
+//             (mu (sqrt(kappa (u3 - 1)) + mu dn)) - wZ sqrt(D)/mu,
+//   da_r/dw = [p alpha_D (1 - u)/(sqrt D + 1) - c]/mu + s- sqrt((1+u1)(1+u2)) kappa /
+//             (mu (sqrt(kappa (u3 + 1)) + mu dn)) + wZ sqrt(D)/mu,           c = C wZ / A'.
+// They depend on w only through u, so t(w), a_r(w), b_r(w) are a secular term plus a sine series
+// in x = pi w / K (K = K(k)), whose coefficients come from a DCT-I of samples on [0, K],
+// doubled until the upper half of the coefficients is at round-off. No state is refused for
+// passing near or through the vertical, and none for starting there while moving.
+// The body rates follow from the kinematics: Omega = (2 betadot + i wZ beta) / alpha (or, where
+// |alpha| < |beta|, from alphadot), with betadot = e^{i b_r} (i b_r' F + F') wdot / sqrt(2).
 //
-// Handled exactly: torque-free tops (m g h = 0: the free symmetric top, in closed form, with
-// A' = A0 for the fixed tip) and the sleeping top (axis vertical and omega_perp = 0: an
-// equilibrium). Steady precession (u1 = u2) needs no special case: the nutation amplitude
-// multiplies every periodic term, and the state error is that of the roots (~1e-16).
-// Refused with InvalidParameter("integrator", why): the viscous scene (not integrable), the
-// frictionless top without gravity (g = 0, h > 0: the cubic degenerates), an axis that is
-// vertical while it moves, and motions whose series do not converge within kMaxTerms
-// coefficients (the axis passes so near the vertical that the Euler angles are singular).
+// 3. Serving requests. Over one nutation period T = 2K t'(mean) the pair (alpha, beta) turns by
+// fixed phases: alpha(t + T) = -e^{i 2K a_r'(mean)} alpha(t), beta likewise, Omega by their
+// ratio. One period from the start is interpolated, lazily, by piecewise Chebyshev series
+// (chebyshev.hpp) of alpha, beta and Omega; a request is then one Clenshaw sum of six short
+// series and, once per period, the period's two phase factors. If the top leaves the model's
+// validity (below), the interpolated span ends at that event instead.
+//
+// 4. Events in closed form. R and e_Zz are functions of u alone: z_G = h u, so R = m (g + h
+// udd) with udd = (f' D - f D')/(2 D^2) (fixed tip: f'/2): the sign of R is that of the quartic
+// (fixed tip: quadratic) P(u) = 2 g D^2 + h (f' D - f D'). Its roots in [u1, u2] (by isolating
+// intervals from the roots of its derivatives) and u = 0 give the phases w where the motion
+// enters R < 0 or e_Zz <= 0; the first one after the start, converted by t(w), is the event.
+// Nothing is sampled, so no dip of R, however short, is missed.
+//
+// Handled in closed form as well: torque-free tops with a fixed G (m g h = 0 and alpha_D = 0:
+// the free symmetric top) and the sleeping top (axis vertical, omega_perp = 0: an equilibrium).
+// Steady precession (u1 = u2) needs no special case (k = 0). The frictionless top without
+// gravity (kappa = 0, f quadratic: u3 -> infinity) is the limit k -> 0 with mu^2 = -f''/2.
+// Refused with InvalidParameter("integrator", why), so that auto falls back to a time-stepper:
+// the viscous scene (not integrable), a motion exactly on the separatrix (k = 1: it approaches
+// the unstable vertical for ever, the period is infinite) and series that do not converge within
+// kMaxSamples samples.
 #pragma once
 
 #include <Eigen/Core>
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <complex>
 #include <cstdio>
 #include <limits>
 #include <string>
@@ -48,6 +82,8 @@
 
 #include "spinning_top/drivers.hpp"
 #include "spinning_top/events.hpp"
+#include "spinning_top/integrators/chebyshev.hpp"
+#include "spinning_top/integrators/elliptic.hpp"
 #include "spinning_top/kinematics.hpp"
 #include "spinning_top/parameters.hpp"
 #include "spinning_top/scenes/fixed_tip.hpp"
@@ -57,53 +93,95 @@ namespace spinning_top {
 
 namespace exact_detail {
 
+using Complex = std::complex<double>;
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kEpsilon = std::numeric_limits<double>::epsilon();
-/// Largest number of Fourier coefficients per series (beyond: refused, see above).
-constexpr int kMaxTerms = 4096;
+/// Largest number of samples per half period of the series (beyond: refused).
+constexpr int kMaxSamples = 1 << 14;
 
-/// Three series sharing the argument x: sum_k c[k][i] sin(k x), k = 1..n, by Clenshaw's
-/// recurrence b_k = c_k + 2 cos(x) b_{k+1} - b_{k+2}, sum = b_1 sin(x).
-inline std::array<double, 3> sine_sums(const std::vector<std::array<double, 3>>& c, double cos_x, double sin_x) {
-  double b1[3] = {0.0, 0.0, 0.0}, b2[3] = {0.0, 0.0, 0.0};
+/// N series sharing the argument x: sum_k c[k][i] sin((k+1) x), by Clenshaw's recurrence
+/// b_k = c_k + 2 cos(x) b_{k+1} - b_{k+2}, sum = b_1 sin(x).
+template <std::size_t N>
+std::array<double, N> sine_sums(const std::vector<std::array<double, N>>& c, double cos_x, double sin_x) {
+  std::array<double, N> b1{}, b2{};
   const double two_cos = 2.0 * cos_x;
   for (std::size_t k = c.size(); k-- > 0;) {
-    for (int i = 0; i < 3; ++i) {
+    for (std::size_t i = 0; i < N; ++i) {
       const double b0 = c[k][i] + two_cos * b1[i] - b2[i];
       b2[i] = b1[i];
       b1[i] = b0;
     }
   }
-  return {b1[0] * sin_x, b1[1] * sin_x, b1[2] * sin_x};
+  for (std::size_t i = 0; i < N; ++i) b1[i] *= sin_x;
+  return b1;
 }
 
-/// Whether a series has converged on an n-point grid: its upper half of coefficients is at
-/// round-off relative to scale (aliasing then leaves the lower half exact to round-off and the
-/// neglected tail is smaller still, the coefficients of an analytic function decaying
-/// geometrically).
-inline bool converged(const std::vector<std::array<double, 3>>& c, int i, double scale) {
-  double tail = 0.0;
-  for (std::size_t k = 0; k < c.size(); ++k) {
-    if (!std::isfinite(c[k][i])) return false;
-    if (k >= c.size() / 2) tail = std::max(tail, std::abs(c[k][i]));
+/// sum_k c[k] cos((k+1) x) by Clenshaw: b_1 cos(x) - b_2.
+inline double cosine_sum(const std::vector<double>& c, double cos_x) {
+  double b1 = 0.0, b2 = 0.0;
+  const double two_cos = 2.0 * cos_x;
+  for (std::size_t k = c.size(); k-- > 0;) {
+    const double b0 = c[k] + two_cos * b1 - b2;
+    b2 = b1;
+    b1 = b0;
   }
-  return tail <= 64.0 * kEpsilon * scale;
+  return b1 * cos_x - b2;
 }
 
-/// Drops trailing coefficients that are below round-off of every series (each changes a sum
-/// by less than half an ulp of its scale; they are the samples' rounding, not the function's).
-inline void trim(std::vector<std::array<double, 3>>& c, const std::array<double, 3>& scale) {
-  while (!c.empty()) {
-    const auto& last = c.back();
-    bool negligible = true;
-    for (int i = 0; i < 3; ++i) negligible = negligible && std::abs(last[i]) <= 0.5 * kEpsilon * scale[i];
-    if (!negligible) break;
-    c.pop_back();
+/// In-place radix-2 complex FFT (Cooley-Tukey, decimation in time) of (re, im), n a power of
+/// two; the arithmetic written out (std::complex's operator* checks for infinities).
+inline void fft(std::vector<double>& re, std::vector<double>& im) {
+  const std::size_t n = re.size();
+  for (std::size_t i = 1, j = 0; i < n; ++i) {
+    std::size_t bit = n >> 1;
+    for (; j & bit; bit >>= 1) j ^= bit;
+    j ^= bit;
+    if (i < j) std::swap(re[i], re[j]), std::swap(im[i], im[j]);
+  }
+  // e^{-2 pi i k / n}, each from its own cos and sin, kept for the next transform of this size
+  // (the series double their size until converged, and every start repeats the sizes).
+  static thread_local std::vector<double> cosine, sine;
+  if (cosine.size() != n / 2) {
+    cosine.resize(n / 2);
+    sine.resize(n / 2);
+    for (std::size_t k = 0; k < n / 2; ++k) {
+      cosine[k] = std::cos(2.0 * kPi * k / n);
+      sine[k] = -std::sin(2.0 * kPi * k / n);
+    }
+  }
+  for (std::size_t length = 2; length <= n; length <<= 1) {
+    const std::size_t half = length / 2, stride = n / length;
+    for (std::size_t start = 0; start < n; start += length) {
+      for (std::size_t k = 0; k < half; ++k) {
+        const double wr = cosine[k * stride], wi = sine[k * stride];
+        const std::size_t a = start + k, b = a + half;
+        const double odd_re = re[b] * wr - im[b] * wi, odd_im = re[b] * wi + im[b] * wr;
+        re[b] = re[a] - odd_re, im[b] = im[a] - odd_im;
+        re[a] += odd_re, im[a] += odd_im;
+      }
+    }
   }
 }
 
-/// Root of the polynomial f in [lo, hi], where f(lo) and f(hi) differ in sign: Newton's
-/// method safeguarded by bisection (Numerical Recipes' rtsafe), to round-off.
+/// Cosine coefficients a_k, k = 0..n, of two even 2n-periodic functions given by their n + 1
+/// samples s_j = g(pi j / n) (the trapezoidal rule, i.e. a DCT-I), through one FFT of the even
+/// extensions packed as real and imaginary parts (each has a real spectrum):
+/// g(x) = a_0 + sum_{k>=1} a_k cos(k x) to the aliasing error.
+inline std::array<std::vector<double>, 2> cosine_coefficients(const std::vector<double>& first,
+                                                              const std::vector<double>& second) {
+  const std::size_t n = first.size() - 1;
+  std::vector<double> re(2 * n), im(2 * n);
+  for (std::size_t j = 0; j <= n; ++j) re[j] = first[j], im[j] = second[j];
+  for (std::size_t j = 1; j < n; ++j) re[2 * n - j] = first[j], im[2 * n - j] = second[j];
+  fft(re, im);
+  std::array<std::vector<double>, 2> a = {std::vector<double>(n + 1), std::vector<double>(n + 1)};
+  for (std::size_t k = 0; k <= n; ++k) a[0][k] = re[k] / static_cast<double>(n), a[1][k] = im[k] / static_cast<double>(n);
+  for (auto& c : a) c[0] *= 0.5, c[n] *= 0.5;
+  return a;
+}
+
+/// Root of f in [lo, hi], where f(lo) and f(hi) differ in sign: Newton's method safeguarded by
+/// bisection (Numerical Recipes' rtsafe), to round-off.
 template <class F, class DF>
 double bracketed_root(const F& f, const DF& df, double lo, double hi) {
   double f_lo = f(lo);
@@ -129,6 +207,59 @@ double bracketed_root(const F& f, const DF& df, double lo, double hi) {
   return x;
 }
 
+/// A real polynomial c[0] + c[1] v + ... (low degree).
+using Polynomial = std::vector<double>;
+
+inline double evaluate(const Polynomial& p, double v) {
+  double sum = 0.0;
+  for (std::size_t i = p.size(); i-- > 0;) sum = sum * v + p[i];
+  return sum;
+}
+inline Polynomial derivative(const Polynomial& p) {
+  Polynomial d;
+  for (std::size_t i = 1; i < p.size(); ++i) d.push_back(static_cast<double>(i) * p[i]);
+  return d;
+}
+inline Polynomial multiply(const Polynomial& a, const Polynomial& b) {
+  if (a.empty() || b.empty()) return {};
+  Polynomial c(a.size() + b.size() - 1, 0.0);
+  for (std::size_t i = 0; i < a.size(); ++i)
+    for (std::size_t j = 0; j < b.size(); ++j) c[i + j] += a[i] * b[j];
+  return c;
+}
+inline Polynomial subtract(Polynomial a, const Polynomial& b) {
+  a.resize(std::max(a.size(), b.size()), 0.0);
+  for (std::size_t i = 0; i < b.size(); ++i) a[i] -= b[i];
+  return a;
+}
+
+/// The points of (lo, hi) where p changes sign, in increasing order: the critical points of p
+/// (where p' changes sign, recursively) cut [lo, hi] into intervals where p is monotone, and
+/// each interval whose ends differ in sign holds exactly one root (Newton-bisection). A root
+/// where p only touches zero is not a sign change and is not reported.
+inline std::vector<double> sign_changes(Polynomial p, double lo, double hi) {
+  while (!p.empty() && p.back() == 0.0) p.pop_back();
+  std::vector<double> roots;
+  if (p.size() < 2 || !(lo < hi)) return roots;
+  const Polynomial dp = derivative(p);
+  std::vector<double> cuts = {lo};
+  for (double c : sign_changes(dp, lo, hi)) cuts.push_back(c);
+  cuts.push_back(hi);
+  auto f = [&](double v) { return evaluate(p, v); };
+  auto df = [&](double v) { return evaluate(dp, v); };
+  for (std::size_t i = 0; i + 1 < cuts.size(); ++i) {
+    const double fa = f(cuts[i]), fb = f(cuts[i + 1]);
+    if ((fa < 0.0 && fb > 0.0) || (fa > 0.0 && fb < 0.0)) roots.push_back(bracketed_root(f, df, cuts[i], cuts[i + 1]));
+  }
+  return roots;
+}
+
+inline std::string format(double value) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, "%.3g", value);
+  return buffer;
+}
+
 }  // namespace exact_detail
 
 /// The exact motion from one state (t0, y0). Throws InvalidParameter("integrator", why) for the
@@ -137,42 +268,42 @@ template <class Model>
 class ExactSolution {
  public:
   using State = typename Model::State;
+  using Complex = exact_detail::Complex;
   static_assert(std::is_same_v<Model, FixedTip> || std::is_same_v<Model, Frictionless>,
                 "exact: only the integrable scenes (fixed tip, frictionless)");
   enum class Kind { kQuadrature, kFreeRotation, kSleeping };
 
+  /// The attitude as Cayley-Klein pair, q = (Re alpha, Re beta, Im beta, Im alpha), and the
+  /// transverse body rate Omega = omega_X + i omega_Y.
+  struct Motion {
+    Complex alpha, beta, omega;
+  };
+
   ExactSolution() = default;
 
   ExactSolution(const Model& model, double t0, const State& y0) : t0_(t0) {
-    using exact_detail::kPi;
     const TopParameters& p = model.parameters();
     constexpr bool sliding = std::is_same_v<Model, Frictionless>;
     const double h = p.tip_distance;
     transverse_ = sliding ? p.inertia_transverse : p.inertia_about_tip();  // A'
-    alpha_ = sliding ? p.mass * h * h / p.inertia_transverse : 0.0;
+    alpha_d_ = sliding ? p.mass * h * h / p.inertia_transverse : 0.0;
     kappa_ = 2.0 * p.mass * p.gravity * h / transverse_;
+    gravity_ = p.gravity;
+    tip_distance_ = h;
     spin_ = model.spin();
     axial_ = p.inertia_axial;
-    q0_ = attitude_of(y0).normalized();
-    wx0_ = y0[state_index::kOmegaX];
-    wy0_ = y0[state_index::kOmegaY];
     State unit = y0;
     normalize_attitude(unit);
+    q0_ = attitude_of(unit);
+    wx0_ = unit[state_index::kOmegaX];
+    wy0_ = unit[state_index::kOmegaY];
     const Vector3 gamma = vertical_in_body(unit);
-    if (kappa_ == 0.0) {
-      if (alpha_ != 0.0)
-        throw InvalidParameter("integrator",
-                               "exact: a frictionless top without gravity (g = 0, h > 0) makes the quadrature's cubic "
-                               "degenerate, which is not implemented; use gauss6 or dop853");
+    if (kappa_ == 0.0 && alpha_d_ == 0.0) {
       init_free_rotation();
       return;
     }
     const double sin2 = gamma.x() * gamma.x() + gamma.y() * gamma.y();
-    if (sin2 == 0.0) {
-      if (wx0_ != 0.0 || wy0_ != 0.0)
-        throw InvalidParameter("integrator",
-                               "exact: the axis is vertical while it moves (theta = 0, omega_perp != 0): the Euler "
-                               "angles of the quadrature are singular there; use auto or dop853");
+    if (sin2 == 0.0 && wx0_ == 0.0 && wy0_ == 0.0) {
       kind_ = Kind::kSleeping;  // an equilibrium: Gamma = e_Z, no torque, omega_perp stays 0
       return;
     }
@@ -180,94 +311,78 @@ class ExactSolution {
   }
 
   Kind kind() const { return kind_; }
-  /// The event functions (R, e_Zz) are periodic with this period [s]; infinite for an
-  /// equilibrium (sleeping top, top at rest without torque).
-  double event_period() const { return event_period_; }
   /// Nutation period T [s] of the quadrature (0 otherwise), turning points u1 <= u2.
   double nutation_period() const { return kind_ == Kind::kQuadrature ? period_ : 0.0; }
   double turning_point_low() const { return u0_ + v1_; }
   double turning_point_high() const { return u0_ + v2_; }
-  /// Fourier coefficients per series, in s (the quadrature) and in time (what one evaluation sums).
-  int terms_in_s() const { return terms_in_s_; }
-  int terms() const { return static_cast<int>(series_.size()); }
+  /// Fourier terms per series in w (what the start computed; requests do not sum them).
+  int terms() const { return static_cast<int>(std::max(angle_sine_.size(), time_sine_.size())); }
+  /// Samples per half period the series needed (a cost measure).
+  int samples() const { return samples_; }
+  /// The first time after the start at which the motion leaves the model's validity, and
+  /// which way (kNone and infinity if it never does).
+  Event first_event() const { return event_; }
+  double first_event_time() const { return event_time_; }
+  double start_time() const { return t0_; }
+  /// Period factors of the quadrature: alpha(t + T) = alpha_turn * alpha(t), beta likewise.
+  Complex alpha_turn() const { return alpha_turn_; }
+  Complex beta_turn() const { return beta_turn_; }
+  /// A bound of |omega| over the motion (the scale of the body rates and of their round-off).
+  double rate_scale() const { return rate_scale_; }
 
-  /// Quadrature only: the state at nutation phase s with phi = psi = 0 (the event functions R and
-  /// e_Zz depend on theta, thetadot and phidot only, by the top's symmetry).
-  State at_phase(double s) const {
-    const double sin_s = std::sin(s), cos_s = std::cos(s);
-    const double v = v2_ - (v2_ - v1_) * sin_s * sin_s;
-    const double one_minus_u = d0_ - v, sin2 = one_minus_u * (2.0 - one_minus_u), sin_theta = std::sqrt(sin2);
-    const double dt_ds = 2.0 * std::sqrt((1.0 + alpha_ * sin2) / (kappa_ * (v3_ - v)));
-    const double u_dot = -(v2_ - v1_) * 2.0 * sin_s * cos_s / dt_ds;
-    State y;
-    write(y, Quaternion(std::sqrt(0.5 * (2.0 - one_minus_u)), std::sqrt(0.5 * one_minus_u), 0.0, 0.0), -u_dot / sin_theta,
-          (p0_ - c_ * v) / sin_theta);
-    return y;
+  /// The motion at time t, from the closed form.
+  Motion motion(double t) const {
+    const double dt = t - t0_;
+    if (kind_ == Kind::kSleeping) {
+      const double half = 0.5 * spin_ * dt;
+      const Complex turn(std::cos(half), std::sin(half));
+      return {Complex(q0_.w(), q0_.z()) * turn, Complex(q0_.x(), q0_.y()) * std::conj(turn), Complex(0.0, 0.0)};
+    }
+    if (kind_ == Kind::kFreeRotation) return free_rotation(dt);
+    return motion_at_phase(phase_of_time(t));
   }
 
   /// The state at time t.
-  State at(double t) const {
+  State at(double t) const { return state_of(motion(t)); }
+
+  static State state_of(const Motion& m) {
     State y;
-    const double dt = t - t0_;
-    if (kind_ == Kind::kSleeping) {
-      const Quaternion q = q0_ * Quaternion(std::cos(0.5 * spin_ * dt), 0.0, 0.0, std::sin(0.5 * spin_ * dt));
-      write(y, q, 0.0, 0.0);
-      return y;
-    }
-    if (kind_ == Kind::kFreeRotation) return free_rotation(dt);
-    using exact_detail::kPi;
-    // tau: time since the upper turning point s = 0; n whole periods plus r in [0, T).
-    const double tau = dt + tau0_;
-    const double n = std::floor(tau / period_);
-    const double r = std::fma(-n, period_, tau);
-    const double x = 2.0 * kPi * r / period_;
-    const std::array<double, 3> periodic = exact_detail::sine_sums(series_, std::cos(x), std::sin(x));
-    // s - n pi (sin^2 s and sin 2s have period pi), phi and psi.
-    const double s = kPi * r / period_ + periodic[0];
-    const double phi = phi_offset_ + n * phi_per_period_ + phi_rate_ * r + periodic[1];
-    const double psi = psi_offset_ + n * psi_per_period_ + psi_rate_ * r + periodic[2];
-    const double sin_s = std::sin(s), cos_s = std::cos(s);
-    const double v = v2_ - (v2_ - v1_) * sin_s * sin_s;  // u - u0
-    const double one_minus_u = d0_ - v, one_plus_u = 2.0 - one_minus_u;
-    const double sin2 = one_minus_u * one_plus_u, sin_theta = std::sqrt(sin2);
-    const double dt_ds = 2.0 * std::sqrt((1.0 + alpha_ * sin2) / (kappa_ * (v3_ - v)));
-    const double u_dot = -(v2_ - v1_) * 2.0 * sin_s * cos_s / dt_ds;
-    const double p = p0_ - c_ * v;  // sin^2(theta) phidot = (L_z - C wZ u) / A'
-    // q = qz(phi) qx(theta) qz(psi) = (ch cos a, sh cos b, sh sin b, ch sin a), a = (phi+psi)/2,
-    // b = (phi-psi)/2, ch = cos(theta/2) = sqrt((1+u)/2), sh = sin(theta/2) = sqrt((1-u)/2).
-    const double a = 0.5 * (phi + psi), b = 0.5 * (phi - psi);
-    const double ca = std::cos(a), sa = std::sin(a), cb = std::cos(b), sb = std::sin(b);
-    const double ch = std::sqrt(0.5 * one_plus_u), sh = std::sqrt(0.5 * one_minus_u);
-    const Quaternion q(sign_ * ch * ca, sign_ * sh * cb, sign_ * sh * sb, sign_ * ch * sa);
-    const double cos_psi = ca * cb + sa * sb, sin_psi = sa * cb - ca * sb;  // psi = a - b
-    // omega_X = phidot sin(theta) sin(psi) + thetadot cos(psi), thetadot = -udot / sin(theta).
-    write(y, q, (p * sin_psi - u_dot * cos_psi) / sin_theta, (p * cos_psi + u_dot * sin_psi) / sin_theta);
+    y[state_index::kQw] = m.alpha.real();
+    y[state_index::kQx] = m.beta.real();
+    y[state_index::kQy] = m.beta.imag();
+    y[state_index::kQz] = m.alpha.imag();
+    y[state_index::kOmegaX] = m.omega.real();
+    y[state_index::kOmegaY] = m.omega.imag();
     return y;
   }
 
  private:
-  static void write(State& y, const Quaternion& q, double wx, double wy) {
-    y[state_index::kQw] = q.w();
-    y[state_index::kQx] = q.x();
-    y[state_index::kQy] = q.y();
-    y[state_index::kQz] = q.z();
-    y[state_index::kOmegaX] = wx;
-    y[state_index::kOmegaY] = wy;
-  }
-
-  /// Torque-free symmetric top (transverse moment A'): L is fixed in the world, the body turns
-  /// about it at |L|/A' and about its own axis at nu = (A' - C) wZ / A' (Landau & Lifshitz,
-  /// sec. 33): q(t) = exp(t L_world / A') q0 exp(t nu e_Z); omega_perp turns by -nu t in the body.
+  /// Torque-free symmetric top with G fixed (transverse moment A'): L is fixed in the world,
+  /// the body turns about it at |L|/A' and about its own axis at nu = (A' - C) wZ / A' (Landau
+  /// & Lifshitz, sec. 33): q(t) = exp(t L_world / A') q0 exp(t nu e_Z); omega_perp turns by
+  /// -nu t in the body. R = m g never changes sign; the axis may reach the floor on its cone:
+  /// e_Zz(t) = A + rho cos(w t - delta) (Rodrigues' rotation of e_Z about L), which falls
+  /// through 0 first at w t = delta + acos(-A / rho) (mod 2 pi).
   void init_free_rotation() {
     kind_ = Kind::kFreeRotation;
     momentum_world_ = q0_ * Vector3(transverse_ * wx0_, transverse_ * wy0_, axial_ * spin_);
     body_rate_ = (transverse_ - axial_) * spin_ / transverse_;
-    const double rate = momentum_world_.norm() / transverse_;
-    // (R, e_Zz) depend on the axis' angle to the vertical, periodic with the cone's period.
-    event_period_ = rate > 0.0 ? 2.0 * exact_detail::kPi / rate : std::numeric_limits<double>::infinity();
+    const double momentum = momentum_world_.norm();
+    if (!(momentum > 0.0)) return;  // at rest: nothing moves
+    const double rate = momentum / transverse_;
+    const Vector3 n = momentum_world_ / momentum, axis = q0_ * Vector3::UnitZ();
+    const double a = axis.dot(n) * n.z(), b = axis.z() - a, c = n.cross(axis).z();
+    const double rho = std::hypot(b, c);
+    if (!(a - rho <= 0.0) || rho == 0.0) return;  // the cone stays above the floor
+    const double two_pi = 2.0 * exact_detail::kPi;
+    double phase = std::atan2(c, b) + std::acos(std::clamp(-a / rho, -1.0, 1.0));
+    phase = std::fmod(phase, two_pi);
+    if (phase < 0.0) phase += two_pi;
+    event_ = Event::kFallen;
+    event_time_ = t0_ + phase / rate;
   }
 
-  State free_rotation(double dt) const {
+  Motion free_rotation(double dt) const {
     const Vector3 turn = dt / transverse_ * momentum_world_;
     const double angle = turn.norm();
     const Quaternion world_turn =
@@ -275,34 +390,179 @@ class ExactSolution {
     const double body_angle = body_rate_ * dt;
     const Quaternion q = world_turn * q0_ * Quaternion(std::cos(0.5 * body_angle), 0.0, 0.0, std::sin(0.5 * body_angle));
     const double c = std::cos(body_angle), s = std::sin(body_angle);
-    State y;
-    write(y, q, c * wx0_ + s * wy0_, -s * wx0_ + c * wy0_);
-    return y;
+    return {Complex(q.w(), q.z()), Complex(q.x(), q.y()), Complex(c * wx0_ + s * wy0_, -s * wx0_ + c * wy0_)};
   }
 
   void init_quadrature(const State& y0, const Vector3& gamma, double sin2) {
-    using exact_detail::kPi;
+    using exact_detail::kEpsilon;
     kind_ = Kind::kQuadrature;
     const double qx = y0[state_index::kQx], qy = y0[state_index::kQy];
     u0_ = gamma.z();
     d0_ = 2.0 * (qx * qx + qy * qy);  // 1 - u0 without cancellation
     c_ = axial_ * spin_ / transverse_;
-    // From the state (Gamma = (sin(theta) sin(psi), sin(theta) cos(psi), cos(theta))):
-    // udot = omega_Y Gamma_X - omega_X Gamma_Y, p = sin^2(theta) phidot = omega . Gamma_perp.
+    // From the state (Gamma_perp = sin(theta) e^{i(pi/2 - psi)}): udot = omega_Y Gamma_X -
+    // omega_X Gamma_Y, p = sin^2(theta) phidot = omega . Gamma_perp.
     const double u_dot0 = wy0_ * gamma.x() - wx0_ * gamma.y();
     p0_ = wx0_ * gamma.x() + wy0_ * gamma.y();
-    // A planar motion (phidot = 0) computed from rotated components leaves p at round-off:
-    // make it exact, or the spinless top's period, which runs through theta = pi after its
-    // fall, would divide round-off by sin(theta) = 0 there.
-    if (std::abs(p0_) <= 8.0 * exact_detail::kEpsilon * std::hypot(wx0_, wy0_) * std::sqrt(sin2)) p0_ = 0.0;
-    const double d_0 = 1.0 + alpha_ * sin2;
-    // K = 2 (E' - m g h u0) / A' = omega_perp^2 + alpha udot0^2 (kinetic energy without spin).
-    const double k_energy = wx0_ * wx0_ + wy0_ * wy0_ + alpha_ * u_dot0 * u_dot0;
+    // A planar motion (phidot = 0) computed from rotated components leaves p at round-off.
+    if (std::abs(p0_) <= 8.0 * kEpsilon * std::hypot(wx0_, wy0_) * std::sqrt(sin2)) p0_ = 0.0;
+    const double d_start = 1.0 + alpha_d_ * sin2;
+    // K = 2 (E' - m g h u0) / A' = omega_perp^2 + alpha_D udot0^2 (kinetic energy without spin).
+    const double k_energy = wx0_ * wx0_ + wy0_ * wy0_ + alpha_d_ * u_dot0 * u_dot0;
     // Taylor coefficients of f(u0 + v) = f0 + f1 v + f2 v^2 + kappa v^3.
-    const double f0 = u_dot0 * u_dot0 * d_0;
-    const double f1 = -kappa_ * sin2 - 2.0 * u0_ * k_energy + 2.0 * c_ * p0_;
-    const double f2 = 2.0 * kappa_ * u0_ - k_energy - c_ * c_;
-    const double kappa = kappa_;
+    f0_ = u_dot0 * u_dot0 * d_start;
+    f1_ = -kappa_ * sin2 - 2.0 * u0_ * k_energy + 2.0 * c_ * p0_;
+    f2_ = 2.0 * kappa_ * u0_ - k_energy - c_ * c_;
+    find_turning_points();
+    delta_ = v2_ - v1_;
+    // The distances of the turning points from the vertical, 1 - u1, 1 - u2, u3 - 1, and from the
+    // downward vertical, 1 + u1, 1 + u2, to full relative precision (end_roots()).
+    const double p_up = p0_ - c_ * d0_, p_down = p0_ + c_ * (2.0 - d0_);  // p(1), p(-1)
+    end_roots(p_up, p_down, k_energy);
+    // mu^2 = kappa (u3 - u1); for kappa = 0 (u3 -> infinity) its limit -f2 (Vieta).
+    mu2_ = kappa_ > 0.0 ? kappa_ * (one_minus_u1_ - one_minus_u3_) : -f2_;  // (u3 - 1) + (1 - u1)
+    if (!(mu2_ > 0.0) || !std::isfinite(mu2_))
+      throw InvalidParameter("integrator", "exact: the nutation's cubic is degenerate (kappa (u3 - u1) = " +
+                                               exact_detail::format(mu2_) + "); use dop853");
+    mu_ = std::sqrt(mu2_);
+    // k'^2 = (u3 - u2)/(u3 - u1): near the separatrix both u3 - 1 and 1 - u2 are small.
+    const double complement =
+        kappa_ > 0.0 ? std::sqrt((one_minus_u2_ - one_minus_u3_) / (one_minus_u1_ - one_minus_u3_)) : 1.0;
+    if (!(complement > 0.0))
+      throw InvalidParameter("integrator",
+                             "exact: the motion lies on the separatrix (k = 1: it approaches the unstable vertical "
+                             "for ever and its period is infinite); use dop853");
+    modulus_ = elliptic::JacobiModulus(std::min(1.0, complement));
+    kappa_u3_minus_1_ = kappa_ > 0.0 ? -kappa_ * one_minus_u3_ : mu2_;
+    kappa_u3_plus_1_ = mu2_ + kappa_ * one_plus_u1_;
+    // Signs of the pole parts: p(1) = p0 - c (1 - u0), p(-1) = p0 + c (1 + u0).
+    sign_up_ = p_up >= 0.0 ? 1.0 : -1.0;
+    sign_down_ = p_down >= 0.0 ? 1.0 : -1.0;
+    pole_up_ = sign_up_ * std::sqrt(one_minus_u1_ * one_minus_u2_);
+    pole_down_ = sign_down_ * std::sqrt(one_plus_u1_ * one_plus_u2_);
+    // |omega| bounds |Omega| (K(u1) = omega_perp^2 + alpha_D udot^2 at the lowest point) and sets
+    // the round-off of Omega = (2 betadot + i wZ beta)/alpha, whose terms are ~ |omega| each.
+    rate_scale_ = std::sqrt(std::max(k_energy - kappa_ * v1_, 0.0) + spin_ * spin_) + 1e-300;
+    build_series();
+    // The start's phase w0 in [0, 2K): sn^2 = (u0 - u1)/(u2 - u1), cn^2 = (u2 - u0)/(u2 - u1),
+    // dn^2 = (u3 - u0)/(u3 - u1), from the roots without cancellation; u rises on (0, K).
+    const double quarter = modulus_.quarter_period();
+    if (delta_ > 0.0) {
+      const double sn2 = -v1_ / delta_, cn2 = v2_ / delta_;
+      const double dn2 = kappa_ > 0.0 ? (d0_ - one_minus_u3_) / (one_minus_u1_ - one_minus_u3_) : 1.0;
+      const double w = elliptic::inverse_sn(std::sqrt(sn2), cn2, dn2);
+      w0_ = u_dot0 >= 0.0 ? w : 2.0 * quarter - w;
+      if (u_dot0 == 0.0 && v2_ == 0.0) w0_ = quarter;  // at the upper turning point exactly
+    } else {
+      w0_ = 0.0;  // steady precession: every phase is the same state
+    }
+    time_of_w0_ = time_of_phase(w0_);
+    period_ = 2.0 * quarter * mean_[0];
+    alpha_turn_ = -std::polar(1.0, 2.0 * quarter * mean_[1]);
+    beta_turn_ = -std::polar(1.0, 2.0 * quarter * mean_[2]);
+    // Offsets: alpha(w0) = alpha0 fixes e^{i a}; beta's from beta0 and betadot0 together, which
+    // stays well posed when the start is at the vertical (beta0 = 0).
+    alpha_offset_ = beta_offset_ = Complex(1.0, 0.0);
+    const Complex alpha0(q0_.w(), q0_.z()), beta0(q0_.x(), q0_.y()), omega0(wx0_, wy0_);
+    const Motion start = motion_at_phase(w0_, &beta_rate_free_);
+    alpha_offset_ = unit(alpha0 / start.alpha);
+    const Complex beta_rate0 = 0.5 * (alpha0 * omega0 - Complex(0.0, spin_) * beta0);
+    const double rate2 = spin_ * spin_ + std::norm(omega0) + 0.25 * mu2_ / d_start + 1e-300;
+    beta_offset_ = unit(beta0 * std::conj(start.beta) + beta_rate0 * std::conj(beta_rate_free_) / rate2);
+    find_first_event();
+  }
+
+  static Complex unit(Complex z) {
+    const double r = std::abs(z);
+    return r > 0.0 && std::isfinite(r) ? z / r : Complex(1.0, 0.0);
+  }
+
+  /// 1 - u_i and 1 + u_i to full relative precision. They enter where the axis passes near the
+  /// vertical (1 - u2 small: the amplitude of beta there is sqrt((1 - u2)/2)) and near the
+  /// separatrix (u3 - 1 small too: k'), and 1 + u1 for a top swinging through the bottom; from
+  /// the roots in v = u - u0 they would keep only an absolute precision ~ eps. Expanded about
+  /// u = 1 and u = -1 the cubic's constant terms are exact invariants, f(+-1) = -p(+-1)^2, so its
+  /// small roots come out with relative precision: the root of largest magnitude (from the
+  /// v-roots, polished) is divided out from the low end (which keeps the small roots' relative
+  /// accuracy; Wilkinson, Rounding Errors in Algebraic Processes, ch. 2) and the quadratic left is
+  /// solved without cancellation.
+  ///   f(1 - z) = -p(1)^2 + (2 K(1) - 2 c p(1)) z + (2 kappa - K(1) - c^2) z^2 - kappa z^3,
+  ///   f(-1 + y) = -p(-1)^2 + (2 K(-1) + 2 c p(-1)) y - (2 kappa + K(-1) + c^2) y^2 + kappa y^3,
+  /// K(u) = 2 (E' - m g h u)/A' = K(u0) - kappa (u - u0); roots z3 <= 0 <= z2 <= z1, y1 <= y2 <= y3.
+  void end_roots(double p_up, double p_down, double k_energy) {
+    using exact_detail::Polynomial;
+    auto polish = [](const Polynomial& g, double x) {
+      const Polynomial dg = exact_detail::derivative(g);
+      for (int i = 0; i < 4; ++i) {
+        const double slope = exact_detail::evaluate(dg, x);
+        if (slope == 0.0) break;
+        const double next = x - exact_detail::evaluate(g, x) / slope;
+        if (!(std::abs(exact_detail::evaluate(g, next)) < std::abs(exact_detail::evaluate(g, x)))) break;
+        x = next;
+      }
+      return x;
+    };
+    // Roots of q0 + q1 x + q2 x^2 in increasing order, without cancellation.
+    auto quadratic = [](double q0, double q1, double q2) {
+      const double disc = std::sqrt(std::max(0.0, q1 * q1 - 4.0 * q2 * q0));
+      const double s = -0.5 * (q1 + std::copysign(disc, q1));
+      double a = s / q2, b = s != 0.0 ? q0 / s : 0.0;
+      if (a > b) std::swap(a, b);
+      return std::array<double, 2>{a, b};
+    };
+    // Divides g by (x - r) from the constant term up: the quotient's coefficients.
+    auto deflate = [](const Polynomial& g, double r) {
+      const double q0 = -g[0] / r, q1 = (q0 - g[1]) / r;
+      return std::array<double, 2>{q0, q1};
+    };
+    const double k_up = k_energy - kappa_ * d0_, k_down = k_energy + kappa_ * (2.0 - d0_);
+    const Polynomial g = {-p_up * p_up, 2.0 * k_up - 2.0 * c_ * p_up, 2.0 * kappa_ - k_up - c_ * c_, -kappa_};
+    const Polynomial h = {-p_down * p_down, 2.0 * k_down + 2.0 * c_ * p_down, -2.0 * kappa_ - k_down - c_ * c_, kappa_};
+    double z1 = d0_ - v1_, z2 = d0_ - v2_, z3 = -std::numeric_limits<double>::infinity();
+    double y1 = 2.0 - d0_ + v1_, y2 = 2.0 - d0_ + v2_;
+    if (kappa_ > 0.0) {
+      z3 = d0_ - v3_;
+      if (-z3 > z1) {  // u3 is the farthest from 1: z1, z2 from the quotient
+        const double big = polish(g, z3);
+        const std::array<double, 2> q = deflate(g, big);
+        const std::array<double, 2> r = quadratic(q[0], q[1], g[3]);
+        z3 = big, z2 = polish(g, r[0]), z1 = polish(g, r[1]);
+      } else {  // u1 is: z2, z3 from the quotient
+        const double big = polish(g, z1);
+        const std::array<double, 2> q = deflate(g, big);
+        const std::array<double, 2> r = quadratic(q[0], q[1], g[3]);
+        z1 = big, z3 = polish(g, r[0]), z2 = polish(g, r[1]);
+      }
+      const double big = polish(h, 2.0 - d0_ + v3_);  // y3 = 1 + u3 >= 2 - ... is the largest
+      const std::array<double, 2> q = deflate(h, big);
+      const std::array<double, 2> r = quadratic(q[0], q[1], h[3]);
+      y1 = polish(h, r[0]), y2 = polish(h, r[1]);
+    } else if (g[2] != 0.0) {
+      const std::array<double, 2> r = quadratic(g[0], g[1], g[2]);
+      z2 = polish(g, r[0]), z1 = polish(g, r[1]);
+      const std::array<double, 2> s = quadratic(h[0], h[1], h[2]);
+      y1 = polish(h, s[0]), y2 = polish(h, s[1]);
+    }
+    // Each distance from its better source: from the v-roots where that is a sum of positive
+    // terms (1 - u1 = d0 - v1, 1 + u2), or where it does not cancel; from the end expansions
+    // where the v-roots would cancel (the turning point much nearer the vertical than the start).
+    // The end roots come in pairs that may be close to each other (steady precession: z1 ~ z2),
+    // but a root used here is then far from the other two, hence well conditioned.
+    (void)y2;
+    one_minus_u1_ = d0_ - v1_;
+    const double from_v2 = d0_ - v2_;
+    one_minus_u2_ = std::clamp(from_v2 < 0.5 * d0_ ? z2 : from_v2, 0.0, one_minus_u1_);
+    const double from_v3 = d0_ - v3_;  // 1 - u3 <= 0
+    one_minus_u3_ = std::min(0.0, -from_v3 < 0.5 * (v3_ + 1.0) ? z3 : from_v3);
+    const double from_v1 = 2.0 - d0_ + v1_;
+    one_plus_u1_ = std::max(0.0, from_v1 < 0.5 * (2.0 - d0_) ? y1 : from_v1);
+    one_plus_u2_ = 2.0 - d0_ + v2_;
+  }
+
+  /// Roots v1 <= 0 <= v2 <= v3 of f(u0 + v) (v3 = infinity for kappa = 0).
+  void find_turning_points() {
+    using exact_detail::bracketed_root;
+    const double f0 = f0_, f1 = f1_, f2 = f2_, kappa = kappa_;
     auto f = [&](double v) { return f0 + v * (f1 + v * (f2 + v * kappa)); };
     auto df = [&](double v) { return f1 + v * (2.0 * f2 + 3.0 * kappa * v); };
     auto polish = [&](double v) {  // Newton steps on the full cubic while they reduce |f|
@@ -315,244 +575,381 @@ class ExactSolution {
       }
       return v;
     };
-    if (f0 == 0.0) {
-      // A turning point: v = 0 is a root exactly; deflate to kappa v^2 + f2 v + f1.
+    v3_ = std::numeric_limits<double>::infinity();
+    if (kappa == 0.0) {
+      // f = f0 + f1 v + f2 v^2 with f2 = -K - c^2 < 0 (or f identically 0: nothing moves).
+      if (f2 == 0.0) {
+        v1_ = v2_ = 0.0;
+      } else {
+        const double disc = std::sqrt(std::max(0.0, f1 * f1 - 4.0 * f2 * f0));
+        const double qq = -0.5 * (f1 + std::copysign(disc, f1));
+        const double a = qq / f2, b = qq != 0.0 ? f0 / qq : 0.0;
+        v1_ = std::min(a, b);
+        v2_ = std::max(a, b);
+        if (f0 == 0.0) (std::abs(v1_) < std::abs(v2_) ? v1_ : v2_) = 0.0;
+        v1_ = std::min(v1_, 0.0);
+        v2_ = std::max(v2_, 0.0);
+      }
+    } else if (f0 == 0.0) {
+      // A turning point: v = 0 is a root exactly; deflate to kappa v^2 + f2 v + f1 = kappa (v - a)
+      // (v - b). f = kappa v (v - a)(v - b) is >= 0 between u1 and u2, so: a < 0 < b (f1 < 0)
+      // puts the start at the upper turning point (v1 = a, v2 = 0, v3 = b); 0 < a <= b (f1 > 0)
+      // at the lower one (v1 = 0, v2 = a, v3 = b); f1 = 0 is a double root at the start, a
+      // steady precession (v1 = v2 = 0) if the third root lies above.
       const double disc = std::sqrt(std::max(0.0, f2 * f2 - 4.0 * kappa * f1));
       const double qq = -0.5 * (f2 + std::copysign(disc, f2));
-      std::array<double, 3> roots = {0.0, polish(qq / kappa), qq != 0.0 ? polish(f1 / qq) : 0.0};
-      std::sort(roots.begin(), roots.end());
-      v1_ = roots[0];
-      v2_ = roots[1];
-      v3_ = roots[2];
+      double a = polish(qq / kappa), b = qq != 0.0 ? polish(f1 / qq) : 0.0;
+      if (a > b) std::swap(a, b);
+      if (f1 < 0.0) {
+        v1_ = std::min(a, 0.0), v2_ = 0.0, v3_ = std::max(b, 0.0);
+      } else if (f1 > 0.0 && a > 0.0) {
+        v1_ = 0.0, v2_ = a, v3_ = b;
+      } else if (f1 == 0.0 && -f2 / kappa >= 0.0) {
+        v1_ = v2_ = 0.0, v3_ = -f2 / kappa;
+      } else {
+        throw InvalidParameter("integrator", "exact: the start is a turning point of the nutation with no motion "
+                                             "towards either side (f'(u0) = " + exact_detail::format(f1) +
+                                             "); use dop853");
+      }
     } else {
-      // f(0) > 0 >= f(u = -1) = -((L_z + C wZ)/A')^2 (PHYSICS.md) brackets u1 (= -1 when that
-      // vanishes: the spinless top swings through the bottom). u2 lies between 0 and the local
-      // minimum of f, the larger root of f', where f <= 0 (u2 <= 1 <= u3 are both roots
-      // beyond 0, and u3 = 1 for the spinless top).
+      // f(0) > 0 >= f(u = -1) = -p(-1)^2 brackets u1 (= -1 when p(-1) = 0: the spinless top
+      // swings through the bottom). u2 lies between 0 and the local minimum of f, the larger
+      // root of f', where f <= 0 (u2 <= 1 <= u3 are both roots beyond 0).
       const double lo = -1.0 - u0_;
-      v1_ = f(lo) < 0.0 ? exact_detail::bracketed_root(f, df, lo, 0.0) : lo;
+      v1_ = f(lo) < 0.0 ? bracketed_root(f, df, lo, 0.0) : lo;
       const double disc = std::sqrt(std::max(0.0, f2 * f2 - 3.0 * kappa * f1));
       const double minimum = f2 < 0.0 ? (disc - f2) / (3.0 * kappa) : -f1 / (f2 + disc);  // cancellation-free
       if (!(minimum > 0.0 && f(minimum) <= 0.0))
         throw InvalidParameter("integrator", "exact: the turning points of the nutation cannot be separated "
-                                             "(no root of the cubic above the current tilt); use auto or dop853");
-      v2_ = exact_detail::bracketed_root(f, df, 0.0, minimum);
-      if (!(v2_ < d0_ - 4.0 * exact_detail::kEpsilon))
-        throw InvalidParameter("integrator",
-                               "exact: the axis reaches the vertical (L_z = C omega_Z), where the Euler angles of "
-                               "the quadrature are singular; use auto or dop853");
+                                             "(no root of the cubic above the current tilt); use dop853");
+      v2_ = bracketed_root(f, df, 0.0, minimum);
       v3_ = polish(-f2 / kappa - v1_ - v2_);  // Vieta: v1 + v2 + v3 = -f2 / kappa
+      if (v3_ < v2_) v3_ = v2_;
     }
-    if (!(v1_ <= 0.0 && 0.0 <= v2_ && v2_ <= v3_ && v3_ > 0.0 && std::isfinite(v3_)))
+    if (!(v1_ <= 0.0 && 0.0 <= v2_ && v2_ <= v3_ && std::isfinite(v1_) && std::isfinite(v2_)))
       throw InvalidParameter("integrator", "exact: the turning points of the nutation cannot be separated "
-                                           "(u - u0 roots " + format(v1_) + ", " + format(v2_) + ", " + format(v3_) +
-                                           "); use auto or dop853");
-    // Phase: sin(2 s0) = -udot0 (dt/ds)(s0) / (u2 - u1), cos(2 s0) = (-v1 - v2) / (u2 - u1).
-    const double sin_part = -u_dot0 * 2.0 * std::sqrt(d_0 / (kappa_ * v3_)), cos_part = -v1_ - v2_;
-    double s0 = (sin_part == 0.0 && cos_part == 0.0) ? 0.0 : 0.5 * std::atan2(sin_part, cos_part);
-    if (s0 < 0.0) s0 += kPi;
-
-    build_series_in_s();
-    build_series_in_time();
-
-    // Offsets: the series start at s = 0 (u = u2); the start is at tau0 = t(s0).
-    tau0_ = time_of_s(s0);
-    const Quaternion q_in = q0_;
-    const Vector3 axis = q_in * Vector3::UnitZ();
-    const double phi0 = std::atan2(axis.x(), -axis.y());  // e_Z = (s sin(phi), -s cos(phi), u)
-    const double psi0 = std::atan2(gamma.x(), gamma.y());
-    const double x0 = 2.0 * kPi * tau0_ / period_;
-    const std::array<double, 3> periodic = exact_detail::sine_sums(series_, std::cos(x0), std::sin(x0));
-    phi_offset_ = phi0 - (phi_rate_ * tau0_ + periodic[1]);
-    psi_offset_ = psi0 - (psi_rate_ * tau0_ + periodic[2]);
-    // q and -q are one attitude: keep the sign of the given quaternion.
-    sign_ = 1.0;
-    const State y_start = at(t0_);
-    if (attitude_of(y_start).coeffs().dot(q0_.coeffs()) < 0.0) sign_ = -1.0;
+                                           "(u - u0 roots " + exact_detail::format(v1_) + ", " +
+                                           exact_detail::format(v2_) + ", " + exact_detail::format(v3_) +
+                                           "); use dop853");
   }
 
-  /// u - u0 and the integrands dt/ds, dphi/ds, dpsi/ds at s.
-  std::array<double, 3> integrands(double s) const {
-    const double sin_s = std::sin(s);
-    const double v = v2_ - (v2_ - v1_) * sin_s * sin_s;
-    const double one_minus_u = d0_ - v, sin2 = one_minus_u * (2.0 - one_minus_u);
-    const double dt_ds = 2.0 * std::sqrt((1.0 + alpha_ * sin2) / (kappa_ * (v3_ - v)));
-    // phidot = p / (1 - u^2) with p = (L_z - C wZ u) / A' linear in u; when p vanishes at
-    // u = -1 (e.g. the spinless top, whose period runs through theta = pi after the fall),
-    // phidot = p(1) / (2 (1 - u)) exactly, without 0/0 there.
-    const double p_down = p0_ + c_ * (2.0 - d0_);
-    const double phi_dot = p_down == 0.0 ? (p0_ - c_ * d0_) / (2.0 * one_minus_u) : (p0_ - c_ * v) / sin2;
-    const double psi_dot = spin_ - phi_dot * (u0_ + v);
-    return {dt_ds, phi_dot * dt_ds, psi_dot * dt_ds};
+  /// What depends on the phase w only through u: sn, cn, dn, 1 -+ u, sqrt(D).
+  struct Phase {
+    double sn, cn, dn, v, one_minus_u, one_plus_u, sqrt_d;
+  };
+  Phase phase_values(const elliptic::JacobiValues& j) const {
+    Phase ph;
+    ph.sn = j.sn;
+    ph.cn = j.cn;
+    ph.dn = j.dn;
+    const double sn2 = j.sn * j.sn, cn2 = j.cn * j.cn;
+    ph.v = v1_ + delta_ * sn2;
+    ph.one_minus_u = one_minus_u1_ * cn2 + one_minus_u2_ * sn2;
+    ph.one_plus_u = one_plus_u1_ * cn2 + one_plus_u2_ * sn2;
+    ph.sqrt_d = std::sqrt(1.0 + alpha_d_ * ph.one_minus_u * ph.one_plus_u);
+    return ph;
   }
 
-  /// Cosine series of the three integrands in x = 2s by DCT-I on n + 1 points of s in [0, pi/2],
-  /// n doubled until converged. t(s) = mean_t s + sum_k (a_k / 2k) sin(2ks), etc.
-  void build_series_in_s() {
-    using exact_detail::kPi;
+  /// dt/dw, da_r/dw, db_r/dw at a phase (header comment, eqs. for the analytic remainders).
+  std::array<double, 3> integrands(const Phase& ph) const {
+    const double p = p0_ - c_ * ph.v;
+    const double rd = ph.sqrt_d;
+    const double dt_dw = 2.0 * rd / mu_;
+    const double spin_part = spin_ * rd / mu_;
+    const double up = kappa_ == 0.0 ? 0.0 : pole_up_ * kappa_ / (mu_ * (std::sqrt(kappa_u3_minus_1_) + mu_ * ph.dn));
+    const double down = kappa_ == 0.0 ? 0.0 : pole_down_ * kappa_ / (mu_ * (std::sqrt(kappa_u3_plus_1_) + mu_ * ph.dn));
+    const double db = (p * alpha_d_ * ph.one_plus_u / (rd + 1.0) + c_) / mu_ - up - spin_part;
+    const double da = (p * alpha_d_ * ph.one_minus_u / (rd + 1.0) - c_) / mu_ + down + spin_part;
+    return {dt_dw, da, db};
+  }
+
+  /// Series of t, a_r, b_r in x = pi w / K: cosine series of the integrands by a DCT-I of n + 1
+  /// samples on [0, K] (they are even about 0 and K), n doubled until converged (the samples of
+  /// the coarser grid are reused), integrated term by term.
+  void build_series() {
+    using exact_detail::kEpsilon;
+    const double quarter = modulus_.quarter_period();
+    std::vector<std::array<double, 3>> samples;
     for (int n = 16;; n *= 2) {
-      if (n > exact_detail::kMaxTerms) refuse_series("t(s), phi(s), psi(s)");
-      std::vector<std::array<double, 3>> samples(n + 1);
-      for (int j = 0; j <= n; ++j) samples[j] = integrands(0.5 * kPi * j / n);
-      std::vector<double> cosine(2 * n);
-      for (int m = 0; m < 2 * n; ++m) cosine[m] = std::cos(kPi * m / n);
-      std::vector<std::array<double, 3>> a(n + 1);
-      for (int k = 0; k <= n; ++k) {
-        std::array<double, 3> sum = {0.0, 0.0, 0.0};
-        for (int j = 0; j <= n; ++j) {
-          const double w = (j == 0 || j == n) ? 0.5 : 1.0;
-          const double c = w * cosine[(static_cast<long>(j) * k) % (2 * n)];
-          for (int i = 0; i < 3; ++i) sum[i] += c * samples[j][i];
+      if (n > exact_detail::kMaxSamples) refuse_series();
+      std::vector<std::array<double, 3>> grid(n + 1);
+      for (int j = 0; j <= n; ++j) {
+        if (!samples.empty() && j % 2 == 0) {
+          grid[j] = samples[j / 2];
+        } else {
+          grid[j] = integrands(phase_values(modulus_.at(quarter * j / n)));
         }
-        for (int i = 0; i < 3; ++i) a[k][i] = 2.0 * sum[i] / n;
       }
-      for (int i = 0; i < 3; ++i) a[0][i] *= 0.5, a[n][i] *= 0.5;  // mean and last of DCT-I
+      samples = grid;
+      std::array<std::vector<double>, 3> a;
       std::array<double, 3> scale = {0.0, 0.0, 0.0};
-      for (const auto& ak : a)
-        for (int i = 0; i < 3; ++i) scale[i] = std::max(scale[i], std::abs(ak[i]));
-      std::vector<std::array<double, 3>> tail(a.begin() + 1, a.end());
-      if (!(exact_detail::converged(tail, 0, scale[0]) && exact_detail::converged(tail, 1, scale[1]) &&
-            exact_detail::converged(tail, 2, scale[2])))
-        continue;
-      mean_in_s_ = a[0];
-      integral_series_.assign(a.begin() + 1, a.end());  // cosine coefficients of 2ks ...
-      exact_detail::trim(integral_series_, scale);
-      terms_in_s_ = static_cast<int>(integral_series_.size());
-      for (std::size_t k = 0; k < integral_series_.size(); ++k)
-        for (int i = 0; i < 3; ++i) integral_series_[k][i] /= 2.0 * static_cast<double>(k + 1);  // ... integrated
-      period_ = kPi * mean_in_s_[0];
-      phi_per_period_ = kPi * mean_in_s_[1];
-      psi_per_period_ = kPi * mean_in_s_[2];
-      phi_rate_ = mean_in_s_[1] / mean_in_s_[0];
-      psi_rate_ = mean_in_s_[2] / mean_in_s_[0];
-      event_period_ = period_;
+      bool converged = true;
+      std::array<std::vector<double>, 3> columns;
+      for (int i = 0; i < 3; ++i) {
+        columns[i].resize(n + 1);
+        for (int j = 0; j <= n; ++j) columns[i][j] = grid[j][i];
+      }
+      // The two angle rates share one FFT (their sizes are alike), the time rate has its own.
+      const auto angles = exact_detail::cosine_coefficients(columns[1], columns[2]);
+      a[0] = exact_detail::cosine_coefficients(columns[0], columns[0])[0];
+      a[1] = angles[0], a[2] = angles[1];
+      // An angle rate's coefficients matter to an absolute eps / K (the angle per half period
+      // K), even where the rate itself vanishes (a spinless top's a_r).
+      scale[1] = scale[2] = 1.0 / quarter;
+      for (int i = 0; i < 3; ++i) {
+        double tail = 0.0;
+        for (int k = 0; k <= n; ++k) {
+          if (!std::isfinite(a[i][k])) refuse_series();
+          scale[i] = std::max(scale[i], std::abs(a[i][k]));
+          if (k > n / 2) tail = std::max(tail, std::abs(a[i][k]));
+        }
+        converged = converged && tail <= 64.0 * kEpsilon * scale[i];
+      }
+      if (!converged) continue;
+      samples_ = n;
+      for (int i = 0; i < 3; ++i) mean_[i] = a[i][0];
+      if (alpha_d_ == 0.0) {
+        mean_[0] = 2.0 / mu_;  // fixed tip: dt/dw = 2/mu exactly
+        for (int k = 1; k <= n; ++k) a[0][k] = 0.0;
+      }
+      // Drop the trailing coefficients below round-off: the time's series apart from the
+      // angles' (Newton's method on t(w) sums only the former).
+      int last_time = n, last_angle = n;
+      while (last_time > 0 && std::abs(a[0][last_time]) <= 0.5 * kEpsilon * scale[0]) --last_time;
+      while (last_angle > 0 && std::abs(a[1][last_angle]) <= 0.5 * kEpsilon * scale[1] &&
+             std::abs(a[2][last_angle]) <= 0.5 * kEpsilon * scale[2])
+        --last_angle;
+      time_sine_.assign(last_time, {0.0});
+      time_rate_cosine_.assign(last_time, 0.0);
+      angle_sine_.assign(last_angle, {0.0, 0.0});
+      for (int k = 1; k <= n; ++k) {
+        const double integral = quarter / (exact_detail::kPi * k);
+        if (k <= last_time) time_sine_[k - 1][0] = a[0][k] * integral, time_rate_cosine_[k - 1] = a[0][k];
+        if (k <= last_angle) angle_sine_[k - 1] = {a[1][k] * integral, a[2][k] * integral};
+      }
       return;
     }
   }
 
-  /// t(s), phi(s) - phi(0), psi(s) - psi(0) from the series in s.
-  std::array<double, 3> integrals_of_s(double s) const {
-    const std::array<double, 3> periodic = exact_detail::sine_sums(integral_series_, std::cos(2.0 * s), std::sin(2.0 * s));
-    return {mean_in_s_[0] * s + periodic[0], mean_in_s_[1] * s + periodic[1], mean_in_s_[2] * s + periodic[2]};
+  [[noreturn]] void refuse_series() const {
+    throw InvalidParameter("integrator", "exact: the series in the nutation phase need more than " +
+                                             std::to_string(exact_detail::kMaxSamples) + " samples (k' = " +
+                                             exact_detail::format(modulus_.complement()) + "); use dop853");
   }
-  double time_of_s(double s) const { return integrals_of_s(s)[0]; }
 
-  /// s(tau) - pi tau / T, phi - phi_rate tau, psi - psi_rate tau: odd and T-periodic in tau,
-  /// sine series in 2 pi tau / T by DST-I on a grid of tau in [0, T/2], s found by Newton's
-  /// method on t(s) = tau.
-  void build_series_in_time() {
-    using exact_detail::kPi;
-    const std::array<double, 3> secular = {kPi, phi_per_period_, psi_per_period_};
-    for (int n = 16;; n *= 2) {
-      if (n > exact_detail::kMaxTerms) refuse_series("s(t)");
-      std::vector<std::array<double, 3>> samples(n + 1, {0.0, 0.0, 0.0});
-      for (int j = 1; j < n; ++j) {
-        const double tau = 0.5 * period_ * j / n;
-        double s = kPi * tau / period_;
-        for (int iteration = 0; iteration < 50; ++iteration) {
-          const double ds = (time_of_s(s) - tau) / integrands(s)[0];
-          s -= ds;
-          if (std::abs(ds) <= 2.0 * exact_detail::kEpsilon * std::max(1.0, s)) break;
-        }
-        const std::array<double, 3> angles = integrals_of_s(s);
-        samples[j] = {s - kPi * tau / period_, angles[1] - phi_rate_ * tau, angles[2] - psi_rate_ * tau};
-      }
-      std::vector<double> sine(2 * n);
-      for (int m = 0; m < 2 * n; ++m) sine[m] = std::sin(kPi * m / n);
-      std::vector<std::array<double, 3>> b(n - 1);
-      for (int k = 1; k < n; ++k) {
-        std::array<double, 3> sum = {0.0, 0.0, 0.0};
-        for (int j = 1; j < n; ++j) {
-          const double s = sine[(static_cast<long>(j) * k) % (2 * n)];
-          for (int i = 0; i < 3; ++i) sum[i] += s * samples[j][i];
-        }
-        for (int i = 0; i < 3; ++i) b[k - 1][i] = 2.0 * sum[i] / n;
-      }
-      std::array<double, 3> scale = {std::abs(secular[0]), std::abs(secular[1]), std::abs(secular[2])};
-      for (const auto& bk : b)
-        for (int i = 0; i < 3; ++i) scale[i] = std::max(scale[i], std::abs(bk[i]));
-      if (!(exact_detail::converged(b, 0, scale[0]) && exact_detail::converged(b, 1, scale[1]) &&
-            exact_detail::converged(b, 2, scale[2])))
-        continue;
-      series_ = std::move(b);
-      exact_detail::trim(series_, scale);
-      return;
+  /// t, a_r, b_r at phase w (secular term plus sine series on the reduced phase).
+  std::array<double, 3> integrals(double w) const {
+    const double quarter = modulus_.quarter_period();
+    const double turns = std::floor(w / (2.0 * quarter));
+    const double r = std::fma(-turns, 2.0 * quarter, w);
+    const double x = exact_detail::kPi * r / quarter;
+    const double cos_x = std::cos(x), sin_x = std::sin(x);
+    const std::array<double, 1> time = exact_detail::sine_sums(time_sine_, cos_x, sin_x);
+    const std::array<double, 2> angles = exact_detail::sine_sums(angle_sine_, cos_x, sin_x);
+    return {mean_[0] * w + time[0], mean_[1] * w + angles[0], mean_[2] * w + angles[1]};
+  }
+  double time_of_phase(double w) const {
+    if (alpha_d_ == 0.0) return mean_[0] * w;
+    const double quarter = modulus_.quarter_period();
+    const double turns = std::floor(w / (2.0 * quarter));
+    const double x = exact_detail::kPi * std::fma(-turns, 2.0 * quarter, w) / quarter;
+    return mean_[0] * w + exact_detail::sine_sums(time_sine_, std::cos(x), std::sin(x))[0];
+  }
+
+  /// The phase w at time t: t(w) = t0 + T(w) - T(w0), linear for the fixed tip, else Newton's
+  /// method on the series (dt/dw > 0 is bounded away from 0, so it converges from the secular
+  /// guess in a few iterations).
+  double phase_of_time(double t) const {
+    const double elapsed = t - t0_;
+    double w = w0_ + elapsed / mean_[0];
+    if (alpha_d_ == 0.0) return w;
+    const double quarter = modulus_.quarter_period();
+    const double target = time_of_w0_ + elapsed;
+    for (int iteration = 0; iteration < 50; ++iteration) {
+      const double turns = std::floor(w / (2.0 * quarter));
+      const double r = std::fma(-turns, 2.0 * quarter, w);
+      const double x = exact_detail::kPi * r / quarter;
+      const double cos_x = std::cos(x), sin_x = std::sin(x);
+      const double periodic = exact_detail::sine_sums(time_sine_, cos_x, sin_x)[0];
+      const double rate = mean_[0] + exact_detail::cosine_sum(time_rate_cosine_, cos_x);
+      const double step = (mean_[0] * w + periodic - target) / rate;
+      w -= step;
+      if (std::abs(step) <= 2.0 * exact_detail::kEpsilon * std::max(1.0, std::abs(w))) break;
     }
+    return w;
   }
 
-  [[noreturn]] void refuse_series(const char* what) const {
-    throw InvalidParameter("integrator", std::string("exact: the series of ") + what + " need more than " +
-                                             std::to_string(exact_detail::kMaxTerms) +
-                                             " terms: the axis passes " + format(std::acos(std::min(1.0, u0_ + v2_))) +
-                                             " rad from the vertical" +
-                                             (u0_ + v1_ < -0.5 ? " and, after its fall, would pass " +
-                                                                     format(std::acos(std::min(1.0, -(u0_ + v1_)))) +
-                                                                     " rad from the downward vertical"
-                                                               : std::string()) +
-                                             ", where the Euler angles are singular; use auto or dop853");
+  /// alpha, beta and Omega at phase w. With beta_rate_free set, also betadot without the
+  /// offset (for the start).
+  Motion motion_at_phase(double w, Complex* beta_rate_free = nullptr) const {
+    const double quarter = modulus_.quarter_period();
+    const double turns = std::floor(w / (2.0 * quarter));
+    const double r = std::fma(-turns, 2.0 * quarter, w);
+    elliptic::JacobiValues j = modulus_.at(r);
+    if (std::fmod(turns, 2.0) != 0.0) j.sn = -j.sn, j.cn = -j.cn;  // sn, cn have period 4K
+    const Phase ph = phase_values(j);
+    const std::array<double, 3> rates = integrands(ph);
+    const double x = exact_detail::kPi * r / quarter;
+    const std::array<double, 2> periodic = exact_detail::sine_sums(angle_sine_, std::cos(x), std::sin(x));
+    const double a = mean_[1] * w + periodic[0], b = mean_[2] * w + periodic[1];
+    const double root_down1 = std::sqrt(one_plus_u1_), root_down2 = std::sqrt(one_plus_u2_);
+    const double root_up1 = std::sqrt(one_minus_u1_), root_up2 = std::sqrt(one_minus_u2_);
+    const Complex g(root_down1 * ph.cn, sign_down_ * root_down2 * ph.sn);
+    const Complex f(root_up1 * ph.cn, sign_up_ * root_up2 * ph.sn);
+    const Complex dg(-root_down1 * ph.sn * ph.dn, sign_down_ * root_down2 * ph.cn * ph.dn);
+    const Complex df(-root_up1 * ph.sn * ph.dn, sign_up_ * root_up2 * ph.cn * ph.dn);
+    const double w_dot = 1.0 / rates[0];
+    constexpr double kRootHalf = 0.70710678118654752440;
+    const Complex turn_a = std::polar(kRootHalf, a), turn_b = std::polar(kRootHalf, b);
+    const Complex i(0.0, 1.0);
+    Motion m;
+    m.alpha = alpha_offset_ * turn_a * g;
+    m.beta = beta_offset_ * turn_b * f;
+    const Complex alpha_dot = alpha_offset_ * turn_a * (i * rates[1] * g + dg) * w_dot;
+    const Complex beta_dot = beta_offset_ * turn_b * (i * rates[2] * f + df) * w_dot;
+    if (beta_rate_free) *beta_rate_free = turn_b * (i * rates[2] * f + df) * w_dot;
+    // Omega from betadot = (alpha Omega - i wZ beta)/2, or from alphadot = (i wZ alpha - beta
+    // conj(Omega))/2 where beta is the larger (|alpha|^2 = (1 + u)/2).
+    if (ph.one_plus_u >= ph.one_minus_u)
+      m.omega = (2.0 * beta_dot + i * spin_ * m.beta) / m.alpha;
+    else
+      m.omega = std::conj((i * spin_ * m.alpha - 2.0 * alpha_dot) / m.beta);
+    return m;
   }
-  static std::string format(double value) {
-    char buffer[32];
-    std::snprintf(buffer, sizeof buffer, "%.3g", value);
-    return buffer;
+
+  /// The polynomial with the sign of R: P(v) = 2 g D^2 + h (f' D - f D') in v = u - u0
+  /// (R = m P / (2 D^2), header comment).
+  exact_detail::Polynomial normal_force_sign() const {
+    using namespace exact_detail;
+    const Polynomial f = {f0_, f1_, f2_, kappa_};
+    const double sin2 = (2.0 - d0_) * d0_;
+    const Polynomial d = {1.0 + alpha_d_ * sin2, -2.0 * alpha_d_ * u0_, -alpha_d_};  // D(u0 + v)
+    const Polynomial df = derivative(f), dd = derivative(d);
+    Polynomial p = multiply({2.0 * gravity_}, multiply(d, d));
+    const Polynomial force = subtract(multiply(df, d), multiply(f, dd));
+    p.resize(std::max(p.size(), force.size()), 0.0);
+    for (std::size_t k = 0; k < force.size(); ++k) p[k] += tip_distance_ * force[k];
+    return p;
+  }
+
+  /// The first phase after w0 where R < 0 or e_Zz <= 0 begins (R and e_Zz depend on u only, and
+  /// u(w) = u1 + (u2 - u1) sn^2 rises on (0, K) and falls on (K, 2K)), and its time.
+  void find_first_event() {
+    using namespace exact_detail;
+    if (!(delta_ > 0.0)) return;  // u is constant: the start's validity is for ever
+    const double quarter = modulus_.quarter_period(), period_w = 2.0 * quarter;
+    double best = std::numeric_limits<double>::infinity();
+    Event which = Event::kNone;
+    // The phase in [0, K] of v, and the candidate phase after w0 on the rising or falling branch.
+    auto phase_of_v = [&](double v) {
+      const double sn2 = std::clamp((v - v1_) / delta_, 0.0, 1.0), cn2 = std::clamp((v2_ - v) / delta_, 0.0, 1.0);
+      const double dn2 = (mu2_ - kappa_ * (v - v1_)) / mu2_;
+      return elliptic::inverse_sn(std::sqrt(sn2), cn2, dn2);
+    };
+    auto consider = [&](double w, Event event) {
+      double ahead = std::fmod(w - w0_, period_w);
+      if (ahead < 0.0) ahead += period_w;
+      if (ahead > period_w - 8.0 * kEpsilon * period_w) ahead = 0.0;  // at the start, up to round-off
+      if (ahead < best) best = ahead, which = event;
+    };
+    // Fall: u crosses 0 downwards (u1 <= 0), on the falling branch.
+    if (u0_ + v1_ <= 0.0) consider(period_w - phase_of_v(-u0_), Event::kFallen);
+    // Lift-off: R turns negative where P changes sign in (u1, u2); rising branch if P falls
+    // with u there, falling branch if it rises.
+    const Polynomial p = normal_force_sign(), dp = derivative(p);
+    for (double v : sign_changes(p, v1_, v2_)) {
+      const double slope = evaluate(dp, v);
+      if (slope < 0.0) consider(phase_of_v(v), Event::kLiftOff);
+      if (slope > 0.0) consider(period_w - phase_of_v(v), Event::kLiftOff);
+    }
+    if (which == Event::kNone) return;
+    event_ = which;
+    event_time_ = t0_ + (time_of_phase(w0_ + best) - time_of_w0_);
   }
 
   Kind kind_ = Kind::kSleeping;
   double t0_ = 0.0;
-  double transverse_ = 0.0, alpha_ = 0.0, kappa_ = 0.0, spin_ = 0.0, axial_ = 0.0;
+  double transverse_ = 0.0, alpha_d_ = 0.0, kappa_ = 0.0, spin_ = 0.0, axial_ = 0.0, gravity_ = 0.0,
+         tip_distance_ = 0.0;
   Quaternion q0_ = Quaternion::Identity();
   double wx0_ = 0.0, wy0_ = 0.0;
-  double event_period_ = std::numeric_limits<double>::infinity();
+  double rate_scale_ = 0.0;
   // Free rotation.
   Vector3 momentum_world_ = Vector3::Zero();
   double body_rate_ = 0.0;
-  // Quadrature: u0, 1 - u0, roots of f in v = u - u0, C wZ / A', p(u0).
-  double u0_ = 1.0, d0_ = 0.0, v1_ = 0.0, v2_ = 0.0, v3_ = 0.0, c_ = 0.0, p0_ = 0.0;
-  std::array<double, 3> mean_in_s_ = {0.0, 0.0, 0.0};
-  std::vector<std::array<double, 3>> integral_series_;  // in s
-  std::vector<std::array<double, 3>> series_;                          // in time
-  int terms_in_s_ = 0;
-  double period_ = 0.0, phi_per_period_ = 0.0, psi_per_period_ = 0.0, phi_rate_ = 0.0, psi_rate_ = 0.0;
-  double tau0_ = 0.0, phi_offset_ = 0.0, psi_offset_ = 0.0, sign_ = 1.0;
+  // Quadrature: u0, 1 - u0, the cubic's Taylor coefficients about u0 and roots in v = u - u0.
+  double u0_ = 1.0, d0_ = 0.0, c_ = 0.0, p0_ = 0.0, f0_ = 0.0, f1_ = 0.0, f2_ = 0.0;
+  double v1_ = 0.0, v2_ = 0.0, v3_ = 0.0, delta_ = 0.0;
+  double one_minus_u1_ = 0.0, one_minus_u2_ = 0.0, one_minus_u3_ = 0.0, one_plus_u1_ = 0.0, one_plus_u2_ = 0.0;
+  double mu2_ = 0.0, mu_ = 0.0, kappa_u3_minus_1_ = 0.0, kappa_u3_plus_1_ = 0.0;
+  double sign_up_ = 1.0, sign_down_ = 1.0, pole_up_ = 0.0, pole_down_ = 0.0;
+  elliptic::JacobiModulus modulus_;
+  std::array<double, 3> mean_ = {0.0, 0.0, 0.0};
+  std::vector<std::array<double, 1>> time_sine_;   // t(w): sine coefficients (frictionless only)
+  std::vector<double> time_rate_cosine_;            // dt/dw: cosine coefficients
+  std::vector<std::array<double, 2>> angle_sine_;   // a_r(w), b_r(w)
+  int samples_ = 0;
+  double w0_ = 0.0, time_of_w0_ = 0.0, period_ = 0.0;
+  Complex alpha_turn_{1.0, 0.0}, beta_turn_{1.0, 0.0};
+  Complex alpha_offset_{1.0, 0.0}, beta_offset_{1.0, 0.0}, beta_rate_free_{0.0, 0.0};
+  Event event_ = Event::kNone;
+  double event_time_ = std::numeric_limits<double>::infinity();
 };
 
 /// Driver of the exact solution, with the interface of the stepping drivers (drivers.hpp): a
-/// request evaluates the closed form; the first validity event is found once per (re)start.
-/// steps() counts evaluations of the closed form made for requests.
+/// request evaluates the interpolated closed form (exact.hpp, item 3); the first validity event
+/// is known from the start (item 4). steps() counts requests.
 template <class Model>
 class ExactDriver : public DriverBase<Model> {
  public:
   using State = typename Model::State;
+  using Solution = ExactSolution<Model>;
+  using Complex = exact_detail::Complex;
   static constexpr bool kAdaptive = false;
   static constexpr bool kClosedForm = true;
   static constexpr const char* kName = "exact";
 
-  /// Starts at (t, y): constants of motion, series, and the first event. Throws
-  /// InvalidParameter("integrator", why) for a refused case.
+  /// Starts at (t, y): constants of motion, series and the first event. Throws
+  /// InvalidParameter("integrator", why) for a refused case. A restart from the same state
+  /// with the same model (reset() to the initial state) reuses what was built.
   void reset(const Model& model, double t, const State& y) {
+    const bool same = built_ && t == start_t_ && y == start_y_ && same_model(model);
     this->start(model, t, y);
     pending_ = Event::kNone;
     event_time_ = std::numeric_limits<double>::infinity();
+    period_index_ = std::numeric_limits<long>::min();
     if (this->event_ == Event::kNonFinite) return;
-    // Built (or refused) even when the start itself is an event, so that a refusal depends on
-    // the parameters and the state, not on the sign of R there.
-    solution_ = ExactSolution<Model>(model, t, this->y_out_);
-    if (this->event_ == Event::kNone) find_first_event(model);
+    if (!same) {
+      // Built (or refused) even when the start itself is an event, so that a refusal depends on
+      // the parameters and the state, not on the sign of R there.
+      built_ = false;
+      solution_ = Solution(model, t, this->y_out_);
+      parameters_ = model.parameters();
+      spin_ = model.spin();
+      start_t_ = t;
+      start_y_ = y;
+      built_ = true;
+      setup_interpolation();
+    }
+    if (this->event_ == Event::kNone && solution_.first_event() != Event::kNone) locate_event(model);
   }
 
   std::string description() const {
-    char buffer[128];
+    char buffer[160];
     switch (solution_.kind()) {
-      case ExactSolution<Model>::Kind::kQuadrature:
-        std::snprintf(buffer, sizeof buffer, "exact: quadrature, nutation period %.6g s, %d Fourier terms",
-                      solution_.nutation_period(), solution_.terms());
+      case Solution::Kind::kQuadrature:
+        std::snprintf(buffer, sizeof buffer, "exact: nutation period %.6g s, %d Fourier terms", solution_.nutation_period(),
+                      solution_.terms());
         return buffer;
-      case ExactSolution<Model>::Kind::kFreeRotation: return "exact: torque-free rotation";
-      case ExactSolution<Model>::Kind::kSleeping: return "exact: sleeping top";
+      case Solution::Kind::kFreeRotation: return "exact: torque-free rotation";
+      case Solution::Kind::kSleeping: return "exact: sleeping top";
     }
     return "exact";
   }
-  const ExactSolution<Model>& solution() const { return solution_; }
+  const Solution& solution() const { return solution_; }
+  /// Pieces of the interpolated span and how many are built so far (cost diagnostics).
+  int interpolation_pieces() const { return table_.pieces(); }
+  int built_interpolation_pieces() const { return table_.built_pieces(); }
 
   Event advance_to(const Model& /*model*/, double t_target) {
     if (this->event_ != Event::kNone || t_target <= this->t_out_) return this->event_;
@@ -561,107 +958,167 @@ class ExactDriver : public DriverBase<Model> {
       this->y_out_ = event_state_;
       return this->event_ = pending_;
     }
-    State y = solution_.at(t_target);
+    // The interpolation is finite by construction (a piece's coefficients are checked when it is
+    // built, and the period factors have modulus 1); the closed form itself is checked.
+    this->y_out_ = state_at(t_target);
     ++this->steps_;
-    if (!all_finite(y)) return this->event_ = Event::kNonFinite;
+    if (answered_directly_ && !all_finite(this->y_out_)) return this->event_ = Event::kNonFinite;
     this->t_out_ = t_target;
-    this->y_out_ = y;
     return Event::kNone;
   }
 
- private:
-  static constexpr int kSamplesPerPeriod = 128;
-
-  /// The event functions depend only on the nutation phase, so they repeat with
-  /// event_period(): the first event, if any, lies within one period of the start. Sampled at
-  /// 128 points per period; a sampled minimum close enough to zero that the function could dip
-  /// below it between samples is refined by golden-section search (a tangential crossing).
-  /// The crossing is located by the drivers' locate_event (Illinois) on the closed form.
-  void find_first_event(const Model& model) {
-    const double period = solution_.event_period();
-    if (!std::isfinite(period)) return;  // an equilibrium: the state's (R, e_Zz) stay as they are
-    if (solution_.kind() == ExactSolution<Model>::Kind::kQuadrature && solution_.turning_point_low() > 0.0 &&
-        !normal_force_may_vanish(model))
-      return;  // the axis never reaches the floor (u1 > 0) and R > 0 over a whole nutation period
-    const double t0 = this->t_out_;
-    auto state_at = [&](double t) { return solution_.at(t); };
-    auto g_at = [&](double t) { return event_functions(model, solution_.at(t)); };
-    double t_before = t0, t_prev = t0;
-    Eigen::Vector2d g_before = event_functions(model, this->y_out_), g_prev = g_before;
-    for (int j = 1; j <= kSamplesPerPeriod + 1; ++j) {
-      const double t = t0 + period * j / kSamplesPerPeriod;
-      const Eigen::Vector2d g = g_at(t);
-      if (triggered_event(g) != Event::kNone) return locate(model, t_prev, g_prev, t, g, state_at);
-      if (j >= 2) {
-        for (int i = 0; i < 2; ++i) {
-          const double drop = std::max(g_before[i] - g_prev[i], g[i] - g_prev[i]);
-          if (!(g_prev[i] < g_before[i] && g_prev[i] < g[i] && g_prev[i] < 2.0 * drop)) continue;
-          // Golden-section search for the minimum of g_i on [t_before, t].
-          const double ratio = 0.5 * (std::sqrt(5.0) - 1.0);
-          double a = t_before, b = t;
-          double c = b - ratio * (b - a), d = a + ratio * (b - a);
-          double gc = g_at(c)[i], gd = g_at(d)[i];
-          for (int iteration = 0; iteration < 60 && b - a > 1e-15 * std::max(1.0, std::abs(t)); ++iteration) {
-            if (gc < gd) {
-              b = d, d = c, gd = gc, c = b - ratio * (b - a), gc = g_at(c)[i];
-            } else {
-              a = c, c = d, gc = gd, d = a + ratio * (b - a), gd = g_at(d)[i];
-            }
-          }
-          const double t_min = gc < gd ? c : d;
-          const Eigen::Vector2d g_min = g_at(t_min);
-          if (triggered_event(g_min) != Event::kNone) return locate(model, t_before, g_before, t_min, g_min, state_at);
-        }
-      }
-      t_before = t_prev, g_before = g_prev;
-      t_prev = t, g_prev = g;
+  /// The state at t >= the start, from the interpolation table (or the closed form directly
+  /// for the equilibrium and the free rotation, which are cheap).
+  State state_at(double t) {
+    answered_directly_ = solution_.kind() != Solution::Kind::kQuadrature;
+    if (answered_directly_) return solution_.at(t);
+    const double elapsed = t - solution_.start_time();
+    double turns = 0.0, r = elapsed;
+    if (periodic_) {
+      // elapsed >= 0, so truncation is the floor (std::floor and std::fma are library calls
+      // on baseline x86-64). r carries an absolute error ~ eps elapsed, 2e-15 s at 10 s.
+      const double span = table_.span();
+      turns = static_cast<double>(static_cast<long>(elapsed * inverse_span_));
+      r = elapsed - turns * span;
+      if (r < 0.0) turns -= 1.0, r += span;  // the rounded quotient may be one off
+      if (r >= span) turns += 1.0, r -= span;
     }
+    if (!table_.built(table_.piece_of(r)) && !build_piece(r)) {
+      answered_directly_ = true;
+      return solution_.at(t);
+    }
+    const std::array<double, 6> v = table_.evaluate(r);
+    State y;
+    if (turns == 0.0) {
+      y[0] = v[0], y[1] = v[2], y[2] = v[3], y[3] = v[1], y[4] = v[4], y[5] = v[5];
+      return y;
+    }
+    const long n = static_cast<long>(turns);
+    if (n != period_index_) {
+      period_index_ = n;
+      alpha_factor_ = power(solution_.alpha_turn(), n);
+      beta_factor_ = power(solution_.beta_turn(), n);
+      omega_factor_ = beta_factor_ * std::conj(alpha_factor_);
+    }
+    // (a + ib)(c + id), written out: std::complex's operator* also handles infinities, a call.
+    auto times = [](const Complex& f, double re, double im, double& out_re, double& out_im) {
+      out_re = f.real() * re - f.imag() * im;
+      out_im = f.real() * im + f.imag() * re;
+    };
+    double qw, qz, qx, qy, wx, wy;
+    times(alpha_factor_, v[0], v[1], qw, qz);
+    times(beta_factor_, v[2], v[3], qx, qy);
+    times(omega_factor_, v[4], v[5], wx, wy);
+    y[0] = qw, y[1] = qx, y[2] = qy, y[3] = qz, y[4] = wx, y[5] = wy;
+    return y;
   }
 
-  /// R over one nutation period, sampled in the phase s (cheaper than in time: no series), with
-  /// the same golden-section refinement of sampled minima as in time.
-  bool normal_force_may_vanish(const Model& model) const {
-    constexpr double kPi = exact_detail::kPi;
-    auto r_at = [&](double s) { return model.normal_force(solution_.at_phase(s)); };
-    double before = r_at(-kPi / kSamplesPerPeriod), previous = r_at(0.0);
-    for (int j = 1; j <= kSamplesPerPeriod; ++j) {
-      const double s = kPi * j / kSamplesPerPeriod, r = r_at(s);
-      if (!(r >= 0.0) || !(previous >= 0.0)) return true;
-      const double drop = std::max(before - previous, r - previous);
-      if (previous < before && previous < r && previous < 2.0 * drop) {
-        const double ratio = 0.5 * (std::sqrt(5.0) - 1.0);
-        double a = s - 2.0 * kPi / kSamplesPerPeriod, b = s;
-        double c = b - ratio * (b - a), d = a + ratio * (b - a), rc = r_at(c), rd = r_at(d);
-        for (int iteration = 0; iteration < 60 && b - a > 1e-15; ++iteration) {
-          if (rc < rd) {
-            b = d, d = c, rd = rc, c = b - ratio * (b - a), rc = r_at(c);
-          } else {
-            a = c, c = d, rc = rd, d = a + ratio * (b - a), rd = r_at(d);
-          }
-        }
-        if (!(std::min(rc, rd) >= 0.0)) return true;
-      }
-      before = previous;
-      previous = r;
+ private:
+  /// Degree of the interpolation: 8 pieces per period on the toy top (measured: degree 7 needs
+  /// 256 pieces, 13 needs 8, 15 needs 4; a request costs ~20 more instructions per 2 degrees).
+  static constexpr int kDegree = 13;
+  /// The last Chebyshev coefficients of a piece must be at the closed form's own round-off
+  /// (measured ~1e-15 of the scale: alpha, beta ~ 1, Omega ~ rate_scale()).
+  static constexpr double kTailTolerance = 32.0 * exact_detail::kEpsilon;
+  /// A bound on the table (6 kB per piece); a span that needs more is interpolated less
+  /// accurately rather than without bound in memory and time.
+  static constexpr int kMaxPieces = 1 << 12;
+  using Table = PiecewiseChebyshev<6, kDegree>;
+
+  bool same_model(const Model& model) const {
+    const TopParameters& a = model.parameters();
+    const TopParameters& b = parameters_;
+    return model.spin() == spin_ && a.mass == b.mass && a.inertia_transverse == b.inertia_transverse &&
+           a.inertia_axial == b.inertia_axial && a.tip_distance == b.tip_distance && a.gravity == b.gravity &&
+           a.friction == b.friction;
+  }
+
+  /// z^n for a unit complex z: e^{i n arg z} (one sincos; n arg z is exact to the rounding of
+  /// the product, which repeated multiplication would accumulate n times).
+  static Complex power(Complex z, long n) {
+    const double angle = std::arg(z) * static_cast<double>(n);
+    return std::polar(1.0, angle);
+  }
+
+  /// One nutation period from the start, or up to the first event when there is one.
+  void setup_interpolation() {
+    period_index_ = std::numeric_limits<long>::min();
+    if (solution_.kind() != Solution::Kind::kQuadrature) return;
+    const double event_span = solution_.first_event_time() - solution_.start_time();
+    periodic_ = !(event_span < solution_.nutation_period());
+    const double span = periodic_ ? solution_.nutation_period() : std::max(event_span, 1e-300);
+    // Pieces for the phase the interpolated functions turn through in the span: a Chebyshev
+    // series of degree 13 resolves e^{i x} to round-off for |x| <= ~1 rad on [-1, 1] (its
+    // coefficients are Bessel functions, J_13(1) ~ 1e-17). The phase per period is that of the
+    // nutation's harmonics (2 pi per Fourier term in w) and the period factors' turns.
+    const double fraction = span / solution_.nutation_period();
+    const double phase = fraction * (2.0 * exact_detail::kPi * (solution_.terms() + 1) +
+                                     std::abs(std::arg(solution_.alpha_turn())) + std::abs(std::arg(solution_.beta_turn())));
+    int pieces = 4;
+    while (pieces < phase && pieces < kMaxPieces) pieces *= 2;
+    table_.assign(span, pieces);
+    inverse_span_ = 1.0 / span;
+    interpolation_failed_ = false;
+    scale_ = {1.0, 1.0, 1.0, 1.0, solution_.rate_scale(), solution_.rate_scale()};
+  }
+
+  /// Interpolates the piece of r. False if the request must be answered by the closed form
+  /// itself: the closed form is not finite there, or the piece's last coefficients are not at
+  /// round-off, in which case the pieces are halved (every built piece is forgotten and built
+  /// again on demand). One piece per request at most, so that a request's cost is bounded by
+  /// one piece (14 closed-form evaluations) and one evaluation.
+  bool build_piece(double r) {
+    const double start = solution_.start_time();
+    auto values = [&](double time) {
+      const typename Solution::Motion m = solution_.motion(start + time);
+      return std::array<double, 6>{m.alpha.real(), m.alpha.imag(), m.beta.real(), m.beta.imag(), m.omega.real(),
+                                   m.omega.imag()};
+    };
+    const int piece = table_.piece_of(r);
+    const double tail = table_.build(piece, values, scale_);
+    if (!std::isfinite(tail)) {
+      table_.forget(piece);
+      interpolation_failed_ = true;
+      return false;
     }
+    if (tail <= kTailTolerance || table_.pieces() >= kMaxPieces) return true;
+    table_.assign(table_.span(), 2 * table_.pieces());
     return false;
   }
 
-  template <class StateAt>
-  void locate(const Model& model, double t_lo, const Eigen::Vector2d& g_lo, double t_hi, const Eigen::Vector2d& g_hi,
-              const StateAt& state_at) {
-    Event which = Event::kNone;
-    const double t_event = locate_event(model, t_lo, g_lo, t_hi, g_hi, state_at, which);
-    if (which == Event::kNone) return;
-    pending_ = which;
-    event_time_ = t_event;
-    event_state_ = t_event > this->t_out_ ? state_at(t_event) : this->y_out_;
+  /// The event from the closed form; the state reported with it is the last valid one (the
+  /// event time is moved back by ulps while the model's R or e_Zz at the closed-form state is
+  /// already past zero by round-off).
+  void locate_event(const Model& model) {
+    double t = solution_.first_event_time();
+    State y = solution_.at(t);
+    double back = std::max(std::abs(t), 1e-300) * exact_detail::kEpsilon;
+    for (int i = 0; i < 64 && t > this->t_out_ && triggered_event(event_functions(model, y)) != Event::kNone; ++i) {
+      t = std::max(this->t_out_, t - back);
+      back *= 2.0;
+      y = solution_.at(t);
+    }
+    pending_ = solution_.first_event();
+    event_time_ = t;
+    event_state_ = t > this->t_out_ ? y : this->y_out_;
+    normalize_attitude(event_state_);
   }
 
-  ExactSolution<Model> solution_;
+  Solution solution_;
+  Table table_;
+  std::array<double, 6> scale_{};
+  bool periodic_ = true, interpolation_failed_ = false, answered_directly_ = false;
+  double inverse_span_ = 0.0;
+  long period_index_ = std::numeric_limits<long>::min();
+  Complex alpha_factor_{1.0, 0.0}, beta_factor_{1.0, 0.0}, omega_factor_{1.0, 0.0};
   Event pending_ = Event::kNone;
   double event_time_ = std::numeric_limits<double>::infinity();
   State event_state_ = State::Zero();
+  // The start the solution was built from (for reset() to the same state).
+  bool built_ = false;
+  double start_t_ = 0.0, spin_ = 0.0;
+  State start_y_ = State::Zero();
+  TopParameters parameters_;
 };
 
 }  // namespace spinning_top
