@@ -134,7 +134,7 @@ void print_help(std::ostream& out) {
       << " instead. The output's first line says which method ran and why.\n"
          "\n"
          "Output: a comment naming the integrator that ran, e.g.\n"
-         "  # integrator: auto: exact: quadrature, nutation period 0.058 s, 9 Fourier terms\n"
+         "  # integrator: auto: exact: closed form, nutation period 0.058 s, 9 Fourier terms\n"
          "  # integrator: auto: dop853, tolerance 1e-12 (exact refused: <its reason>)\n"
          "then the CSV header\n"
          "  "

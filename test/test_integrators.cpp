@@ -306,7 +306,7 @@ TEST(AutoRule, ExactForTheIntegrableScenesWithDop853AsFallback) {
     EXPECT_EQ(choice.configured, IntegratorType::kAuto);
     EXPECT_EQ(choice.method, IntegratorType::kExact);
     EXPECT_FALSE(choice.fallback);
-    EXPECT_EQ(simulator->integrator_description().rfind("auto: exact: quadrature, nutation period ", 0), 0u)
+    EXPECT_EQ(simulator->integrator_description().rfind("auto: exact: closed form, nutation period ", 0), 0u)
         << simulator->integrator_description();
     // auto runs exact itself: bit for bit the trajectory of the named method.
     SceneConfig named = config;

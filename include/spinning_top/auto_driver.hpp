@@ -83,7 +83,7 @@ class AutoDriver {
     visit([&](auto& driver) { driver.stop(event); });
   }
 
-  /// The running driver's description, and why it runs: e.g. "exact: quadrature, ...", or
+  /// The running driver's description, and why it runs: e.g. "exact: closed form, ...", or
   /// "dop853, tolerance 1e-12 (exact refused: the axis is vertical while it moves ...)".
   std::string description() const {
     const std::string running = visit([](const auto& driver) { return driver.description(); });
@@ -147,11 +147,14 @@ class AutoDriver {
         driver_);
   }
 
-  /// The refusal without its key ("integrator: ") and the refusing method's own name prefix.
+  /// The refusal without its key ("integrator: "), the refusing method's own name prefix and
+  /// its advice to the user ("; use dop853"), which auto has just followed.
   std::string reason_of(const InvalidParameter& refusal) const {
     std::string why = refusal.what();
     for (const std::string& prefix : {refusal.parameter() + ": ", std::string(to_string(plan_.first.type)) + ": "})
       if (why.compare(0, prefix.size(), prefix) == 0) why.erase(0, prefix.size());
+    const std::size_t advice = why.rfind("; use ");
+    if (advice != std::string::npos) why.erase(advice);
     return why;
   }
 

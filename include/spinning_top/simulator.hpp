@@ -130,7 +130,7 @@ class Simulator {
   virtual bool update(const TopParameters& top, const IntegratorSettings& integrator) = 0;
   virtual const SceneConfig& config() const = 0;
   /// What runs and why, e.g. "dopri5, tolerance 1e-10", "rk4, step 0.001 s" or, for auto,
-  /// "auto: exact: quadrature, nutation period 0.0559 s, 12 Fourier terms" or
+  /// "auto: exact: closed form, nutation period 0.0559 s, 12 Fourier terms" or
   /// "auto: dop853, tolerance 1e-12 (exact refused: <its reason>)".
   virtual std::string integrator_description() const = 0;
   virtual IntegratorChoice integrator_choice() const = 0;

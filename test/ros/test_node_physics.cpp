@@ -1,7 +1,7 @@
 // rostest (test/node_physics.test): the node's tf, topics and services against the physics.
 // Four nodes run: /spinning_top (fixed tip, theta0 = 0.3, 500 Hz), /sleeping (theta0 = 0),
-// /exact (the default scene with integrator: exact, 200 Hz) and /vertical (theta0 = 0 with
-// thetadot0 = 1 rad/s, 200 Hz: exact refuses it, auto runs dop853).
+// /exact (the default scene with integrator: exact, 200 Hz) and /weightless (frictionless, g = 0,
+// at rest without spin, 200 Hz: nothing drives the nutation, exact refuses it, auto runs dop853).
 #include <diagnostic_msgs/DiagnosticArray.h>
 #include <dynamic_reconfigure/DoubleParameter.h>
 #include <dynamic_reconfigure/Reconfigure.h>
@@ -143,7 +143,7 @@ TEST(Node, ExactIntegratorNutatesBetweenTheRootsOfTheCubic) {
 }
 
 // Diagnostics say what runs and why: auto runs exact on the shipped scene, and dop853 with
-// exact's refusal where exact cannot start (an axis vertical while it moves).
+// exact's refusal where exact cannot start (a weightless top at rest: nothing drives the nutation).
 TEST(Node, DiagnosticsSayWhichIntegratorAutoRunsAndWhy) {
   ros::NodeHandle nh;
   Recorder<diagnostic_msgs::DiagnosticArray> diagnostics(nh, "/diagnostics");
@@ -160,18 +160,18 @@ TEST(Node, DiagnosticsSayWhichIntegratorAutoRunsAndWhy) {
   ASSERT_TRUE(wait_for(
       [&] {
         return !value_of("spinning_top: simulation", "integrator").empty() &&
-               !value_of("vertical: simulation", "integrator").empty();
+               !value_of("weightless: simulation", "integrator").empty();
       },
       10.0))
-      << "no diagnostics from /spinning_top and /vertical";
+      << "no diagnostics from /spinning_top and /weightless";
   const std::string shipped = value_of("spinning_top: simulation", "integrator");
-  EXPECT_EQ(shipped.rfind("auto: exact: quadrature", 0), 0u) << shipped;
+  EXPECT_EQ(shipped.rfind("auto: exact: closed form", 0), 0u) << shipped;
   EXPECT_EQ(value_of("spinning_top: simulation", "integrator method"), "exact");
   EXPECT_EQ(value_of("spinning_top: simulation", "integrator fallback reason"), "");
-  const std::string vertical = value_of("vertical: simulation", "integrator");
-  EXPECT_EQ(vertical.rfind("auto: dop853, tolerance 1e-12 (exact refused: ", 0), 0u) << vertical;
-  EXPECT_EQ(value_of("vertical: simulation", "integrator method"), "dop853");
-  EXPECT_NE(value_of("vertical: simulation", "integrator fallback reason").find("vertical while it moves"),
+  const std::string weightless = value_of("weightless: simulation", "integrator");
+  EXPECT_EQ(weightless.rfind("auto: dop853, tolerance 1e-12 (exact refused: ", 0), 0u) << weightless;
+  EXPECT_EQ(value_of("weightless: simulation", "integrator method"), "dop853");
+  EXPECT_NE(value_of("weightless: simulation", "integrator fallback reason").find("nothing drives the nutation"),
             std::string::npos);
 }
 

@@ -422,8 +422,9 @@ class ExactSolution {
     // mu^2 = kappa (u3 - u1); for kappa = 0 (u3 -> infinity) its limit -f2 (Vieta).
     mu2_ = kappa_ > 0.0 ? kappa_ * (one_minus_u1_ - one_minus_u3_) : -f2_;  // (u3 - 1) + (1 - u1)
     if (!(mu2_ > 0.0) || !std::isfinite(mu2_))
-      throw InvalidParameter("integrator", "exact: the nutation's cubic is degenerate (kappa (u3 - u1) = " +
-                                               exact_detail::format(mu2_) + "); use dop853");
+      throw InvalidParameter("integrator", "exact: nothing drives the nutation (no gravity torque, no spin and no "
+                                           "transverse motion: the cubic vanishes, kappa (u3 - u1) = " +
+                                               exact_detail::format(mu2_) + ", and the phase is undefined); use dop853");
     mu_ = std::sqrt(mu2_);
     // k'^2 = (u3 - u2)/(u3 - u1): near the separatrix both u3 - 1 and 1 - u2 are small.
     const double complement =
@@ -938,8 +939,8 @@ class ExactDriver : public DriverBase<Model> {
     char buffer[160];
     switch (solution_.kind()) {
       case Solution::Kind::kQuadrature:
-        std::snprintf(buffer, sizeof buffer, "exact: nutation period %.6g s, %d Fourier terms", solution_.nutation_period(),
-                      solution_.terms());
+        std::snprintf(buffer, sizeof buffer, "exact: closed form, nutation period %.6g s, %d Fourier terms",
+                      solution_.nutation_period(), solution_.terms());
         return buffer;
       case Solution::Kind::kFreeRotation: return "exact: torque-free rotation";
       case Solution::Kind::kSleeping: return "exact: sleeping top";
