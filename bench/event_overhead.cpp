@@ -1,0 +1,94 @@
+// Cost of the per-step event check (doc/integrators.md, "Events"): CPU time of 10 s of the toy
+// top through make_simulator, with a request every 1 ms (the node's pattern) and with a single
+// request at 10 s, for the cases the event check was measured on. Prints one line per case:
+// steps, the median CPU time of a run over `rounds` rounds (each round the median of `repeats`
+// runs) and the spread of the round medians, and us per step. Asserts nothing (speed is measured,
+// never asserted in a test).
+//   event_overhead [rounds=5] [repeats=7]
+#include <time.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+#include <vector>
+
+#include "spinning_top/simulator.hpp"
+
+namespace {
+using namespace spinning_top;
+
+double cpu_seconds() {
+  timespec ts;
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
+}
+
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v[v.size() / 2];
+}
+
+struct Case {
+  const char* name;
+  SceneConfig config;
+};
+
+SceneConfig toy(SceneType scene, IntegratorType type) {
+  SceneConfig c;
+  c.scene = scene;
+  c.initial.tilt = 0.3;
+  c.initial.spin = 150.0;
+  c.integrator.type = type;
+  c.integrator.step = 1e-3;
+  c.integrator.tolerance = 1e-10;
+  return c;
+}
+
+/// One run: reset, then requests every `interval` up to 10 s (interval 10: one request).
+double run_once(Simulator& sim, double interval, long& steps, Event& event) {
+  const double start = cpu_seconds();
+  sim.reset();
+  const long n = static_cast<long>(10.0 / interval + 0.5);
+  event = Event::kNone;
+  for (long i = 1; i <= n && event == Event::kNone; ++i) event = sim.advance_to(static_cast<double>(i) * interval);
+  const double elapsed = cpu_seconds() - start;
+  steps = sim.steps();
+  return elapsed;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const int rounds = argc > 1 ? std::atoi(argv[1]) : 5;
+  const int repeats = argc > 2 ? std::atoi(argv[2]) : 7;
+  SceneConfig viscous = toy(SceneType::kViscous, IntegratorType::kDop853);
+  viscous.top.friction = 0.5;
+  const std::vector<Case> cases = {
+      {"viscous k=0.5, dop853 1e-10", viscous},
+      {"fixed tip, splitting6 1 ms", toy(SceneType::kFixedTip, IntegratorType::kSplitting6)},
+      {"fixed tip, gauss6 1 ms", toy(SceneType::kFixedTip, IntegratorType::kGauss6)},
+      {"frictionless, gauss6 1 ms", toy(SceneType::kFrictionless, IntegratorType::kGauss6)},
+      {"fixed tip, dop853 1e-10", toy(SceneType::kFixedTip, IntegratorType::kDop853)},
+  };
+  std::printf("%-30s %-10s %7s %10s %20s %9s\n", "case", "requests", "steps", "ms/10 s", "(round spread)", "us/step");
+  for (const Case& c : cases) {
+    auto sim = make_simulator(c.config);
+    for (double interval : {1e-3, 10.0}) {
+      std::vector<double> round_medians;
+      long steps = 0;
+      Event event = Event::kNone;
+      for (int r = 0; r < rounds; ++r) {
+        std::vector<double> times;
+        for (int k = 0; k < repeats; ++k) times.push_back(run_once(*sim, interval, steps, event));
+        round_medians.push_back(median(times));
+      }
+      const double m = median(round_medians);
+      const auto [lo, hi] = std::minmax_element(round_medians.begin(), round_medians.end());
+      std::printf("%-30s %-10s %7ld %10.3f %9.3f-%-9.3f %9.4f%s\n", c.name, interval < 1.0 ? "every 1ms" : "one at 10s",
+                  steps, 1e3 * m, 1e3 * *lo, 1e3 * *hi, 1e6 * m / static_cast<double>(steps),
+                  event == Event::kNone ? "" : (std::string(" event ") + to_string(event)).c_str());
+    }
+  }
+  return 0;
+}
