@@ -4,7 +4,9 @@
 // steps, the median CPU time of a run over `rounds` rounds (each round the median of `repeats`
 // runs) and the spread of the round medians, and us per step. Asserts nothing (speed is measured,
 // never asserted in a test).
-//   event_overhead [rounds=5] [repeats=7]
+//   event_overhead [rounds=5] [repeats=7] [case substring] [every_1ms|one_at_10s]
+// The last two select one case and one request pattern, e.g. to count its instructions with
+// valgrind --tool=callgrind event_overhead 1 1 splitting6 every_1ms (stable where CPU time is not).
 #include <time.h>
 
 #include <algorithm>
@@ -62,6 +64,7 @@ double run_once(Simulator& sim, double interval, long& steps, Event& event) {
 int main(int argc, char** argv) {
   const int rounds = argc > 1 ? std::atoi(argv[1]) : 5;
   const int repeats = argc > 2 ? std::atoi(argv[2]) : 7;
+  const std::string only_case = argc > 3 ? argv[3] : "", only_pattern = argc > 4 ? argv[4] : "";
   SceneConfig viscous = toy(SceneType::kViscous, IntegratorType::kDop853);
   viscous.top.friction = 0.5;
   const std::vector<Case> cases = {
@@ -73,8 +76,10 @@ int main(int argc, char** argv) {
   };
   std::printf("%-30s %-10s %7s %10s %20s %9s\n", "case", "requests", "steps", "ms/10 s", "(round spread)", "us/step");
   for (const Case& c : cases) {
+    if (std::string(c.name).find(only_case) == std::string::npos) continue;
     auto sim = make_simulator(c.config);
     for (double interval : {1e-3, 10.0}) {
+      if (!only_pattern.empty() && only_pattern != (interval < 1.0 ? "every_1ms" : "one_at_10s")) continue;
       std::vector<double> round_medians;
       long steps = 0;
       Event event = Event::kNone;
