@@ -70,8 +70,8 @@ class FixedStepDriver : public DriverBase<Model> {
 
   double max_step() const { return max_step_; }
   std::string description() const { return std::string(Method::kName) + ", step " + format_step(max_step_); }
-  /// Steps whose interior the event check had to search (events.hpp, EventMonitor).
-  long event_searches() const { return monitor_.searches(); }
+  /// The per-step event check (its counts of searched steps: the cost of the events).
+  const EventMonitor<Model>& event_monitor() const { return monitor_; }
 
   /// Advances to t_target in n equal substeps of at most max_step. Returns the event that
   /// stopped the run (then time() < t_target is the event time), or kNone.
@@ -156,8 +156,8 @@ class AdaptiveDriver : public DriverBase<Model> {
   }
 
   double tolerance() const { return tolerance_; }
-  /// Steps whose interior the event check had to search (events.hpp, EventMonitor).
-  long event_searches() const { return monitor_.searches(); }
+  /// The per-step event check (its counts of searched steps: the cost of the events).
+  const EventMonitor<Model>& event_monitor() const { return monitor_; }
   /// The size of the last accepted step [s] (0 before the first).
   double last_step() const { return has_dense_ ? dense_.dt : 0.0; }
   std::string description() const {

@@ -165,24 +165,30 @@ struct EventCubic {
     const double x = interior_minimum();
     return std::min({g0, g1, x >= 0.0 ? (*this)(x) : g0});
   }
-  /// The screen's allowance for the difference between the event function and H:
-  /// V = |g1 - g0| + |m0| + |m1|, a measure of how much the function moves over the step.
-  /// Why V bounds the interpolation error: G - H = G''''(xi) dt^4 x^2 (1 - x)^2 / 24, at most
-  /// dt^4 max|G''''| / 384 (Hermite remainder; Stoer & Bulirsch, Introduction to Numerical
-  /// Analysis, 3rd ed., Thm. 2.1.5.9). For a single harmonic G = a cos(w t) + c, V is smallest
-  /// on a step centred on an extremum, V = 2 a (w dt) sin(w dt / 2), and the remainder / V is
-  /// then (w dt)^3 / (768 sin(w dt / 2)): 0.003 at w dt = 1, 0.012 at w dt = 2 (the largest step
-  /// validate() admits for the fastest motion), 1 at w dt = 5.75 (1.1 steps per period). With a
-  /// second harmonic as large, cos(w t) + b cos(2 w t + p), b <= 1, no step with w dt <= 2 was
-  /// cleared wrongly in 4e5 random steps (test_events_within_step.cpp; V / 2 cleared one). The screen
-  /// errs only on steps that do not resolve the event function.
-  double allowance() const { return std::abs(g1 - g0) + std::abs(m0) + std::abs(m1); }
+  /// The screen's allowance for the difference between the event function G and H: twice the
+  /// cubic's departure from a straight line, W = 2 (|c2| + |c3|) (H = g0 + m0 x + c2 x^2 + c3 x^3).
+  /// Why W bounds the interpolation error of a step that resolves G: the remainder is
+  /// G - H = G''''(xi) dt^4 x^2 (1 - x)^2 / 24, at most dt^4 max|G''''| / 384 (Hermite remainder;
+  /// Stoer & Bulirsch, Introduction to Numerical Analysis, 3rd ed., Thm. 2.1.5.9), one order of
+  /// the Taylor series beyond c2 ~ G'' dt^2 / 2 and c3 ~ G''' dt^3 / 6. For a single harmonic
+  /// a cos(w t + p), over all phases p, the remainder is at most 0.4 % of W at w dt = 1, 1.7 % at
+  /// w dt = 2 (the largest step validate() admits for the fastest motion), 26 % at w dt = 5
+  /// (computed). With harmonics the phases can cancel c2 and c3 while G'''' stays:
+  /// measured on 1e6 random steps of cos(w t + p1) + b cos(2 w t + p2), none was cleared wrongly
+  /// for w dt <= 2 (b <= 2: harmonics up to 4 / dt) or, without the second harmonic, w dt <= 5;
+  /// the first failures came with harmonics at 6 / dt (5 in 1e6 for w dt <= 3, b <= 1), where
+  /// the step no longer resolves G (the allowance |g1 - g0| + |m0| + |m1|, which clears 2-3 times
+  /// fewer steps, failed there as often). test_events_within_step.cpp checks this.
+  double allowance() const {
+    const double c2 = 3.0 * (g1 - g0) - 2.0 * m0 - m1, c3 = 2.0 * (g0 - g1) + m0 + m1;
+    return 2.0 * (std::abs(c2) + std::abs(c3));
+  }
   /// True if the event function cannot reach its threshold within the step (see allowance()).
   bool clears_zero() const {
     const double margin = allowance();
     // First the convex hull of H's Bernstein control points g0, g0 + m0/3, g1 - m1/3, g1 (Farin,
     // Curves and Surfaces for CAGD, sec. 4.3), which lies below H: no root-finding. It settles
-    // every step whose ends lie above 4/3 of the allowance, i.e. most steps of most runs.
+    // most steps of most runs (g far above zero).
     constexpr double kThird = 1.0 / 3.0;
     if (std::min(std::min(g0, g1), std::min(g0 + kThird * m0, g1 - kThird * m1)) > margin) return true;
     return minimum() > margin;
@@ -203,9 +209,9 @@ struct EventCubic {
 ///  1. Screen, every step, no evaluation of the interpolant: the cubic Hermite H of g from the
 ///     values and rates g, g' = grad g . f at both ends (the end's are the next step's start's:
 ///     one more evaluation of g per step, event_rates()). If min H over the step exceeds the
-///     allowance (EventCubic::allowance(), the function's movement over the step, which bounds
-///     the Hermite remainder for any step that resolves the motion), g cannot reach zero in the
-///     step and nothing more is done. This is what most steps cost.
+///     allowance (EventCubic::allowance(), twice H's departure from a straight line, which bounds
+///     the Hermite remainder for any step that resolves g), g cannot reach zero in the step and
+///     nothing more is done. This is what most steps cost.
 ///  2. Search, only in steps that the screen does not clear or whose end is triggered: g on the
 ///     interpolant at x = 1/4, 1/2, 3/4 and at H's interior minimum; each local minimum of these
 ///     samples (with the ends, using the signs of g' there) whose value is below its drop to the
@@ -219,7 +225,7 @@ struct EventCubic {
 /// Guarantee: along the interpolant, a dip below zero is found whatever its depth (down to the
 /// rounding of g, ~1e-16 of its scale) and duration, if the step resolves the event function
 /// (the screen's bound: harmonics of g up to 4 / dt, e.g. w dt <= 2 for a fundamental with a
-/// second harmonic as large; w dt < 5.75 for a single one) and the search's samples bracket
+/// second harmonic twice as large; w dt <= 5 for a single one) and the search's samples bracket
 /// each of its minima (at most one local minimum of g per quarter step, again a resolved step). The
 /// event time is that of the interpolant: the method's own error in g moves it by
 /// error / |g'| (and decides whether a dip shallower than that error exists at all).
@@ -266,8 +272,10 @@ class EventMonitor {
     return check_projected(model, y_start, t_end, y_end, f_end, state_at);
   }
 
-  /// Steps that the screen could not clear (diagnostics: the cost of the search).
+  /// Steps that the screen could not clear, and the interpolant's evaluations their search took
+  /// (diagnostics: the cost of the search).
   long searches() const { return searches_; }
+  long interpolant_evaluations() const { return interpolant_evaluations_; }
 
  private:
   static constexpr int kMaxSamples = 7;  // both ends, 3 fixed interior points, 2 cubic minima
@@ -314,7 +322,11 @@ class EventMonitor {
   template <class StateAt>
   SPINNING_TOP_NOINLINE StepOutcome search_step(const Model& model, const State& y_start, double t_end,
                                                 const Eigen::Vector2d& g_end, const EventCubic (&cubic)[2],
-                                                const bool (&suspect)[2], const StateAt& state_at) const {
+                                                const bool (&suspect)[2], const StateAt& uncounted_state_at) {
+    auto state_at = [&](double t) {
+      ++interpolant_evaluations_;
+      return uncounted_state_at(t);
+    };
     const double t0 = t_, dt = t_end - t0;
     double offsets[kMaxSamples] = {0.0, 0.25 * dt, 0.5 * dt, 0.75 * dt, dt};
     int n = 5;
@@ -444,7 +456,7 @@ class EventMonitor {
 
   double t_ = 0.0;
   Eigen::Vector2d g_ = Eigen::Vector2d::Zero(), rate_ = Eigen::Vector2d::Zero();  // at the step's start
-  long searches_ = 0;
+  long searches_ = 0, interpolant_evaluations_ = 0;
 };
 
 }  // namespace spinning_top
