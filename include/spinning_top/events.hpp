@@ -65,7 +65,8 @@ inline Event triggered_event(const Eigen::Vector2d& g) {
 /// dg/dt = grad g . f along the flow, by a forward difference along f = f(y): one more
 /// evaluation of g. The increment moves the largest component of y by sqrt(eps) of its size, so
 /// the rates carry a relative error ~1e-8 (truncation and rounding balanced; Dennis & Schnabel,
-/// Numerical Methods for Unconstrained Optimization, sec. 5.4). They only shape the cubic that
+/// Numerical Methods for Unconstrained Optimization and Nonlinear Equations, on finite-difference
+/// derivatives). They only shape the cubic that
 /// screens a step (EventMonitor), for which this is ample. q + eps f_q leaves the unit sphere only
 /// at second order (f_q is tangent to it), below the increment's own rounding.
 template <class Model>
@@ -81,7 +82,7 @@ Eigen::Vector2d event_rates(const Model& model, const typename Model::State& y, 
 
 /// Finds, in (t_lo, t_hi], where event function i turns from valid at t_lo to triggered at t_hi,
 /// by the Illinois variant of regula falsi on state_at(t) (superlinear, and bracketing like
-/// bisection; Dahlquist & Bjorck, Numerical Methods, sec. 6.2). A non-finite value counts as
+/// bisection; Dowell & Jarratt, BIT 11 (1971) 168). A non-finite value counts as
 /// triggered. Returns the last valid time, at most a few ulps of t before the root (4e-15
 /// relative), so that the state reported with the event is still a valid one.
 template <class Model, class StateAt>
@@ -169,7 +170,7 @@ struct EventCubic {
   /// cubic's departure from a straight line, W = 2 (|c2| + |c3|) (H = g0 + m0 x + c2 x^2 + c3 x^3).
   /// Why W bounds the interpolation error of a step that resolves G: the remainder is
   /// G - H = G''''(xi) dt^4 x^2 (1 - x)^2 / 24, at most dt^4 max|G''''| / 384 (Hermite remainder;
-  /// Stoer & Bulirsch, Introduction to Numerical Analysis, 3rd ed., Thm. 2.1.5.9), one order of
+  /// Stoer & Bulirsch, Introduction to Numerical Analysis, sec. 2.1.5), one order of
   /// the Taylor series beyond c2 ~ G'' dt^2 / 2 and c3 ~ G''' dt^3 / 6. For a single harmonic
   /// a cos(w t + p), over all phases p, the remainder is at most 0.4 % of W at w dt = 1, 1.7 % at
   /// w dt = 2 (the largest step validate() admits for the fastest motion), 26 % at w dt = 5
@@ -186,9 +187,9 @@ struct EventCubic {
   /// True if the event function cannot reach its threshold within the step (see allowance()).
   bool clears_zero() const {
     const double margin = allowance();
-    // First the convex hull of H's Bernstein control points g0, g0 + m0/3, g1 - m1/3, g1 (Farin,
-    // Curves and Surfaces for CAGD, sec. 4.3), which lies below H: no root-finding. It settles
-    // most steps of most runs (g far above zero).
+    // First the convex hull of H's Bernstein control points g0, g0 + m0/3, g1 - m1/3, g1 (the
+    // convex hull property of the Bezier form; Farin, Curves and Surfaces for CAGD), which lies
+    // below H: no root-finding. It settles most steps of most runs (g far above zero).
     constexpr double kThird = 1.0 / 3.0;
     if (std::min(std::min(g0, g1), std::min(g0 + kThird * m0, g1 - kThird * m1)) > margin) return true;
     return minimum() > margin;
@@ -203,7 +204,7 @@ struct EventCubic {
 /// Why not only the signs at the step's ends (Hairer's and SUNDIALS' root finding): R can dip
 /// below zero and recover within one step (a lift-off of 0.1 ms between 1 ms steps), which no
 /// sign change shows (Shampine & Thompson, "Event location for ordinary differential
-/// equations", Comput. Math. Appl. 39 (2000) 43, sec. 3: an even number of roots in a step).
+/// equations", Comput. Math. Appl. 39 (2000) 43: an even number of roots in a step).
 ///
 /// How, per event function g and step [t0, t1] (x = (t - t0) / dt):
 ///  1. Screen, every step, no evaluation of the interpolant: the cubic Hermite H of g from the
