@@ -148,8 +148,9 @@ TEST(ShortLiftOff, FrictionlessDipWithinOneStepIsFoundByEveryMethodAtEveryOutput
                      {IntegratorType::kDop853, IntegratorType::kDopri5, IntegratorType::kGauss6, IntegratorType::kRk4});
 }
 
-// The fixed tip kicked at 9.07 rad/s (4e-4 above its threshold): a dip of 0.16 ms at 0.0455 s,
-// which gauss6, splitting6, dopri5 and rk4 stepped over (reporting the dip three periods later).
+// The fixed tip kicked at 9.07 rad/s (4e-5 above its threshold): a dip of 0.16 ms at 0.0455 s,
+// which gauss6, splitting6 and rk4 at 1 ms stepped over (reporting a dip 0.276 s, four nutation
+// periods, later), and dopri5 too (0.161 s).
 TEST(ShortLiftOff, FixedTipDipWithinOneStepIsFoundByEveryMethodAtEveryOutputRate) {
   const SceneConfig top = kicked_top(SceneType::kFixedTip, 9.07);
   const Reference reference = exact_lift_off(top);
@@ -222,9 +223,10 @@ TEST(ShortLiftOff, RandomDipsNearTheThresholdAreFoundWhereTheClosedFormHasThem) 
               dips, shallowest, deepest, worst_error_in_r);
 }
 
-// A graze: kicked 1e-8 above the threshold, R dips to about -1e-8 N (1e-8 of m g) for ~2 us; 1e-8
-// below it, R comes within 1e-8 N of zero and rises again. The first is a lift-off (at exact's
-// time, to the tolerance above: a quarter of the dip's half-length), the second is none.
+// A graze: kicked 1e-8 above the threshold, R dips to about -1e-8 N (1e-8 of m g) for 1.4 us
+// (frictionless) or 2.6 us (fixed tip); 1e-8 below it, R comes within 1e-8 N of zero and rises
+// again. The first is a lift-off (at exact's time, to the tolerance above: a quarter of the dip's
+// half-length), the second is none.
 TEST(GrazingLiftOff, ADipOfTenNanonewtonsIsALiftOffAndATouchOfTenNanonewtonsIsNot) {
   for (SceneType scene : {SceneType::kFixedTip, SceneType::kFrictionless}) {
     SceneConfig top = kicked_top(scene, 0.0);
@@ -242,8 +244,8 @@ TEST(GrazingLiftOff, ADipOfTenNanonewtonsIsALiftOffAndATouchOfTenNanonewtonsIsNo
                   to_string(type), to_string(dip.event), dip.time - reference.time, kNormalForceError / reference.slope);
       EXPECT_EQ(dip.event, Event::kLiftOff) << to_string(scene) << " " << to_string(type);
       EXPECT_NEAR(dip.time, reference.time, kNormalForceError / reference.slope) << to_string(type);
-      // 0.2 s: the touch recurs every nutation period (0.09 s frictionless, 0.12 s fixed tip),
-      // while the methods' error in R (growing with time) stays below 1e-9 N.
+      // 0.2 s: the touch recurs every nutation period (0.032 s frictionless, 0.058 s fixed tip),
+      // while the methods' error in R (growing with time) stays well below the 1e-8 N margin.
       const EventRun no_dip = run_until_event(with_method(touch, type), 0.2);
       EXPECT_EQ(no_dip.event, Event::kNone) << to_string(scene) << " " << to_string(type) << " at " << no_dip.time;
     }
