@@ -3,6 +3,10 @@
 //   FixedStepDriver: any one-step method at a fixed maximal step, equal substeps per request.
 //   AdaptiveDriver: an embedded pair with error control; requests are answered by dense
 //   output, so the output rate never forces the step size.
+// Both hand every step to the one EventMonitor (events.hpp), which projects the attitude,
+// checks finiteness and bounds the event functions over the whole step through the step's
+// interpolant: the method's dense output (adaptive) or the step re-taken from its start with a
+// shorter size (fixed step).
 #pragma once
 
 #include <algorithm>
@@ -16,11 +20,6 @@
 #include "spinning_top/kinematics.hpp"
 
 namespace spinning_top {
-
-template <class State>
-bool all_finite(const State& y) {
-  return y.array().isFinite().all();
-}
 
 /// Common state of a driver: the reported time and state, and the event that ended the run.
 template <class Model>
@@ -61,10 +60,18 @@ class FixedStepDriver : public DriverBase<Model> {
     if (!(max_step > 0.0) || !std::isfinite(max_step)) throw std::invalid_argument("step must be positive and finite");
   }
 
-  void reset(const Model& model, double t, const State& y) { this->start(model, t, y); }
+  void reset(const Model& model, double t, const State& y) {
+    this->start(model, t, y);
+    if (this->event_ != Event::kNone) return;
+    State f;
+    model.derivative(this->y_out_, f);
+    monitor_.start(model, t, this->y_out_, f);
+  }
 
   double max_step() const { return max_step_; }
   std::string description() const { return std::string(Method::kName) + ", step " + format_step(max_step_); }
+  /// The per-step event check (its counts of searched steps: the cost of the events).
+  const EventMonitor<Model>& event_monitor() const { return monitor_; }
 
   /// Advances to t_target in n equal substeps of at most max_step. Returns the event that
   /// stopped the run (then time() < t_target is the event time), or kNone.
@@ -77,52 +84,36 @@ class FixedStepDriver : public DriverBase<Model> {
     // above max_step rather than taking a second, tiny substep for rounding.
     const long n = std::max(1L, static_cast<long>(std::ceil(span / max_step_ * (1.0 - 1e-6))));
     const double dt = span / static_cast<double>(n);
-    Eigen::Vector2d g_old = event_functions(model, this->y_out_);
     for (long i = 1; i <= n; ++i) {
       const double t_new = (i == n) ? t_target : t_start + static_cast<double>(i) * dt;
-      const double h = t_new - this->t_out_;
-      State y_new = this->y_out_;
-      method_.step(model, y_new, h);
+      const State& y0 = this->y_out_;
+      const double t0 = this->t_out_;
+      State y_new = y0;
+      method_.step(model, y_new, t_new - t0);
       ++this->steps_;
-      Eigen::Vector2d g_new;
-      if (!project_and_check(model, y_new, g_new)) return this->event_ = Event::kNonFinite;
-      const Event fired = triggered_event(g_new);
-      if (fired == Event::kNonFinite) return this->event_ = fired;
-      if (fired != Event::kNone) {
-        // Re-take the step from its start with a shorter size: the state at t_lo + tau has
-        // the method's own accuracy, so the event time does too.
-        const State y0 = this->y_out_;
-        const double t0 = this->t_out_;
-        auto state_at = [&](double t) {
-          State y = y0;
-          method_.step(model, y, t - t0);
-          normalize_attitude(y);
-          return y;
-        };
-        Event which;
-        const double t_event = locate_event(model, t0, g_old, t_new, g_new, state_at, which);
-        this->y_out_ = (t_event > t0) ? state_at(t_event) : y0;
-        this->t_out_ = t_event;
-        return this->event_ = which;
+      // The step's interpolant: the step re-taken from its start with the shorter size, so the
+      // state at t0 + tau has the method's own accuracy, and so does the event time.
+      auto state_at = [&](double t) {
+        State y = y0;
+        method_.step(model, y, t - t0);
+        normalize_attitude(y);
+        return y;
+      };
+      const auto outcome = monitor_.check_step(model, y0, t_new, y_new, state_at);
+      if (outcome.event != Event::kNone) {
+        if (outcome.event != Event::kNonFinite) {
+          this->y_out_ = outcome.state;
+          this->t_out_ = outcome.time;
+        }
+        return this->event_ = outcome.event;
       }
       this->y_out_ = y_new;
       this->t_out_ = t_new;
-      g_old = g_new;
     }
     return Event::kNone;
   }
 
  private:
-  /// After a step: projects the attitude, then (if finite) evaluates the event functions.
-  /// Flattened (hot_path.hpp) so that this per-step work is inlined whatever the method;
-  /// the method's step itself is not (radau5's Newton iteration would be large).
-  SPINNING_TOP_FLATTEN static bool project_and_check(const Model& model, State& y, Eigen::Vector2d& g) {
-    normalize_attitude(y);
-    if (!all_finite(y)) return false;
-    g = event_functions(model, y);
-    return true;
-  }
-
   static std::string format_step(double s) {
     char buffer[32];
     std::snprintf(buffer, sizeof buffer, "%g s", s);
@@ -130,6 +121,7 @@ class FixedStepDriver : public DriverBase<Model> {
   }
   double max_step_;
   Method method_;
+  EventMonitor<Model> monitor_;
 };
 
 /// True for embedded pairs whose dense output needs extra evaluations of f (DOP853): the
@@ -156,7 +148,7 @@ class AdaptiveDriver : public DriverBase<Model> {
     t_ = t;
     y_ = this->y_out_;
     model.derivative(y_, f_);
-    g_ = event_functions(model, y_);
+    if (this->event_ == Event::kNone) monitor_.start(model, t, y_, f_);
     dt_ = initial_step(model);
     has_dense_ = dense_complete_ = false;
     pending_ = Event::kNone;
@@ -164,6 +156,8 @@ class AdaptiveDriver : public DriverBase<Model> {
   }
 
   double tolerance() const { return tolerance_; }
+  /// The per-step event check (its counts of searched steps: the cost of the events).
+  const EventMonitor<Model>& event_monitor() const { return monitor_; }
   /// The size of the last accepted step [s] (0 before the first).
   double last_step() const { return has_dense_ ? dense_.dt : 0.0; }
   std::string description() const {
@@ -240,26 +234,22 @@ class AdaptiveDriver : public DriverBase<Model> {
         dense_complete_ = false;
         const double t_new = t_ + dt_;
         State y_new = attempt.y1;
-        normalize_attitude(y_new);
-        // g_ = g(y_) is kept from the previous step (the same y_), not evaluated again.
-        const Eigen::Vector2d g_old = g_, g_new = event_functions(model, y_new);
         ++this->steps_;
-        const Event fired = triggered_event(g_new);
-        if (fired == Event::kNonFinite) return false;
-        if (fired != Event::kNone) {
-          const typename Method::DenseStep& dense = dense_step(model);
-          auto state_at = [&](double t) {
-            State y = Method::dense(dense, t);
-            normalize_attitude(y);
-            return y;
-          };
-          const double t_event = locate_event(model, t_, g_old, t_new, g_new, state_at, pending_);
-          y_ = (t_event > t_) ? state_at(t_event) : y_;
-          t_ = t_event;
+        // The step's interpolant: the method's dense output (completed here if lazy).
+        auto state_at = [&](double t) {
+          State y = Method::dense(dense_step(model), t);
+          normalize_attitude(y);
+          return y;
+        };
+        const auto outcome = monitor_.check_step(model, y_, t_new, y_new, attempt.f1, state_at);
+        if (outcome.event == Event::kNonFinite) return false;
+        if (outcome.event != Event::kNone) {
+          pending_ = outcome.event;
+          y_ = outcome.state;
+          t_ = outcome.time;
           return true;
         }
         y_ = y_new;
-        g_ = g_new;
         // FSAL: f(y1) is reused although the projection moved y1 by O(local error); the
         // mismatch enters the next step multiplied by dt, below its local error.
         f_ = attempt.f1;
@@ -278,7 +268,7 @@ class AdaptiveDriver : public DriverBase<Model> {
   Method method_;
   double t_ = 0.0, dt_ = 0.0, previous_error_ = 1e-4;
   State y_ = State::Zero(), f_ = State::Zero();
-  Eigen::Vector2d g_ = Eigen::Vector2d::Zero();  // event functions at y_
+  EventMonitor<Model> monitor_;
   typename Method::DenseStep dense_;
   bool has_dense_ = false, dense_complete_ = false;
   Event pending_ = Event::kNone;
