@@ -100,7 +100,12 @@ class AutoDriver {
       using Driver = std::variant_alternative_t<index, Candidates>;
       if constexpr (!std::is_same_v<Driver, Unserved>) {
         if (settings.type == static_cast<IntegratorType>(index)) {
-          driver_.template emplace<index>(make_driver<Driver>(settings)).reset(model, t, y);
+          // The running candidate restarts in place (reset() keeps its settings, and exact's
+          // reset() to the state it was built from reuses its series and interpolation).
+          if (driver_.index() == index)
+            std::get<index>(driver_).reset(model, t, y);
+          else
+            driver_.template emplace<index>(make_driver<Driver>(settings)).reset(model, t, y);
           return;
         }
       }

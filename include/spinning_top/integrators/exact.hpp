@@ -327,6 +327,25 @@ class ExactSolution {
   /// Period factors of the quadrature: alpha(t + T) = alpha_turn * alpha(t), beta likewise.
   Complex alpha_turn() const { return alpha_turn_; }
   Complex beta_turn() const { return beta_turn_; }
+  /// The angle the interpolated functions (alpha, beta, Omega) turn through in one period: their
+  /// secular phases plus 2 pi per significant harmonic of the nutation (a coefficient above 1e-3
+  /// of the largest). Sets the pieces of the request interpolation.
+  double phase_per_period() const {
+    if (kind_ != Kind::kQuadrature) return 0.0;
+    const double quarter = modulus_.quarter_period();
+    const double a = std::abs(2.0 * quarter * mean_[1]) + exact_detail::kPi;  // G turns by pi per period
+    const double b = std::abs(2.0 * quarter * mean_[2]) + exact_detail::kPi;
+    double largest = 0.0;
+    for (const auto& c : angle_sine_) largest = std::max({largest, std::abs(c[0]), std::abs(c[1])});
+    for (const auto& c : time_sine_) largest = std::max(largest, std::abs(c[0]) / std::max(mean_[0], 1e-300));
+    int harmonics = 1;  // the nutation itself, through u
+    for (std::size_t k = 0; k < std::max(angle_sine_.size(), time_sine_.size()); ++k) {
+      const double size = std::max(k < angle_sine_.size() ? std::max(std::abs(angle_sine_[k][0]), std::abs(angle_sine_[k][1])) : 0.0,
+                                   k < time_sine_.size() ? std::abs(time_sine_[k][0]) / std::max(mean_[0], 1e-300) : 0.0);
+      if (size > 1e-3 * largest) harmonics = static_cast<int>(k) + 1;
+    }
+    return std::max({a, b, a + b}) + 2.0 * exact_detail::kPi * harmonics;
+  }
   /// A bound of |omega| over the motion (the scale of the body rates and of their round-off).
   double rate_scale() const { return rate_scale_; }
 
@@ -1050,13 +1069,11 @@ class ExactDriver : public DriverBase<Model> {
     const double span = periodic_ ? solution_.nutation_period() : std::max(event_span, 1e-300);
     // Pieces for the phase the interpolated functions turn through in the span: a Chebyshev
     // series of degree 13 resolves e^{i x} to round-off for |x| <= ~1 rad on [-1, 1] (its
-    // coefficients are Bessel functions, J_13(1) ~ 1e-17). The phase per period is that of the
-    // nutation's harmonics (2 pi per Fourier term in w) and the period factors' turns.
-    const double fraction = span / solution_.nutation_period();
-    const double phase = fraction * (2.0 * exact_detail::kPi * (solution_.terms() + 1) +
-                                     std::abs(std::arg(solution_.alpha_turn())) + std::abs(std::arg(solution_.beta_turn())));
-    int pieces = 4;
-    while (pieces < phase && pieces < kMaxPieces) pieces *= 2;
+    // coefficients are Bessel functions, J_13(1) ~ 1e-17), so a piece may span ~2 rad. An
+    // underestimate costs a halving (build_piece()), an overestimate pieces built for nothing.
+    const double phase = span / solution_.nutation_period() * solution_.phase_per_period();
+    int pieces = 2;
+    while (pieces < 0.5 * phase && pieces < kMaxPieces) pieces *= 2;
     table_.assign(span, pieces);
     inverse_span_ = 1.0 / span;
     interpolation_failed_ = false;
