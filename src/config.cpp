@@ -23,16 +23,20 @@ const std::vector<ParameterSpec>& parameter_specs() {
       {"initial/velocity_x", "m/s", "0", false, "initial horizontal velocity of G, x (viscous scene only)"},
       {"initial/velocity_y", "m/s", "0", false, "initial horizontal velocity of G, y (viscous scene only)"},
       {"integrator", "", "auto", false,
-       "auto (splitting6 for fixed_tip, gauss6 for frictionless, radau5 for viscous when the friction time m/(k (1 + m h^2/A)) is "
-       "shorter than step, dop853 otherwise) | rk4 (fixed step) | dopri5 (adaptive, dense output) | dop853 (adaptive, order 8) | "
+       "auto (splitting6 for fixed_tip, gauss6 for frictionless, radau5 for viscous when friction relaxes the slip over "
+       "450x faster than the fastest motion, k (1/m + h^2/A) > 450 max(C |omega_Z|/A, sqrt(m g h/A), |omega|/2), dop853 "
+       "otherwise) | rk4 (fixed step) | dopri5 (adaptive, dense output) | dop853 (adaptive, order 8) | "
        "splitting4 | splitting6 | splitting8 (fixed_tip only: geometric, exact omega_Z and L_z, bounded "
-       "energy error) | gauss6 (fixed_tip, frictionless: geometric, same invariants) | radau5 (Radau IIA, L-stable, fixed step: stiff friction) | rodas4 (Rosenbrock, "
+       "energy error) | gauss6 (fixed_tip, frictionless: geometric, same invariants) | radau5 (Radau IIA, L-stable, adaptive: "
+       "stiff friction) | rodas4 (Rosenbrock, "
        "fixed step: moderately stiff friction) | exact (fixed_tip, frictionless: closed-form solution by quadrature, "
        "no step; refuses a few degenerate states, see doc/integrators.md)"},
       {"step", "s", "0.001", false,
        "largest substep of the fixed-step integrators; refused beyond 2 / (rate of the fastest motion), "
        "auto shortens it to half that instead"},
-      {"tolerance", "", "1e-10", false, "local error tolerance (relative and absolute) of adaptive integrators"},
+      {"tolerance", "", "1e-12", false,
+       "local error tolerance (relative and absolute) of adaptive integrators (auto in the viscous scene: dop853 "
+       "at it, radau5 at a tenth of it)"},
   };
   return specs;
 }

@@ -59,6 +59,12 @@ const char* to_string(IntegratorType integrator) {
 }
 
 namespace {
+// auto in the viscous scene (auto_settings(), doc/integrators.md "Viscous: the default"):
+// radau5 when lambda = k (1/m + h^2/A) exceeds this many times the fastest motion's rate, at
+// this fraction of the `tolerance` key (dop853 runs at the key itself).
+constexpr double kStiffFrictionRatio = 450.0;
+constexpr double kRadauToleranceFactor = 0.01;
+
 constexpr IntegratorType kAllIntegrators[] = {
     IntegratorType::kAuto,       IntegratorType::kRk4,        IntegratorType::kDopri5, IntegratorType::kDop853,
     IntegratorType::kSplitting4,
@@ -118,7 +124,7 @@ MotionRates motion_rates(const SceneConfig& config) {
 
 double largest_fixed_step(const SceneConfig& config, IntegratorType type) {
   if (type == IntegratorType::kAuto || type == IntegratorType::kDopri5 || type == IntegratorType::kDop853 ||
-      type == IntegratorType::kExact)
+      type == IntegratorType::kRadau5 || type == IntegratorType::kExact)
     return std::numeric_limits<double>::infinity();
   const MotionRates rates = motion_rates(config);
   double fastest = rates.fastest_oscillation();
@@ -126,18 +132,30 @@ double largest_fixed_step(const SceneConfig& config, IntegratorType type) {
   return fastest > 0.0 ? 2.0 / fastest : std::numeric_limits<double>::infinity();
 }
 
-IntegratorType auto_integrator(const SceneConfig& config) {
+IntegratorSettings auto_settings(const SceneConfig& config) {
+  IntegratorSettings chosen = config.integrator;
   switch (config.scene) {
-    case SceneType::kFixedTip: return IntegratorType::kSplitting6;
-    case SceneType::kFrictionless: return IntegratorType::kGauss6;
+    case SceneType::kFixedTip: chosen.type = IntegratorType::kSplitting6; break;
+    case SceneType::kFrictionless: chosen.type = IntegratorType::kGauss6; break;
     case SceneType::kViscous: {
-      // Compare the friction time with the substep radau5 would actually take.
-      const double substep = std::min(config.integrator.step, 0.5 * largest_fixed_step(config, IntegratorType::kRadau5));
-      return motion_rates(config).friction * substep > 1.0 ? IntegratorType::kRadau5 : IntegratorType::kDop853;
+      // Stiff when friction relaxes the slip much faster than the top moves: dop853's step is
+      // then bounded by its stability (|h lambda| <~ 5) rather than by accuracy, and radau5,
+      // whose step only the motion bounds, is cheaper (doc/integrators.md, measured crossover).
+      const MotionRates rates = motion_rates(config);
+      const bool stiff = rates.friction > kStiffFrictionRatio * rates.fastest_oscillation();
+      chosen.type = stiff ? IntegratorType::kRadau5 : IntegratorType::kDop853;
+      // radau5's error estimate filters the stiff components (they are damped), but R reads the
+      // slip velocity times k: its error, O(h^3) at a step's end, needs a tighter tolerance.
+      if (stiff) chosen.tolerance = std::max(1e-14, config.integrator.tolerance * kRadauToleranceFactor);
+      break;
     }
   }
-  return IntegratorType::kDopri5;
+  if (largest_fixed_step(config, chosen.type) < std::numeric_limits<double>::infinity())
+    chosen.step = std::min(config.integrator.step, 0.5 * largest_fixed_step(config, chosen.type));
+  return chosen;
 }
+
+IntegratorType auto_integrator(const SceneConfig& config) { return auto_settings(config).type; }
 
 namespace {
 
@@ -198,11 +216,9 @@ void validate(const SceneConfig& config) {
 
 namespace {
 
-/// The substep a fixed-step driver runs at: the configured step, or, for auto, at most half
-/// the largest step of the method auto picked (auto is never refused: it shortens the substep).
-double fixed_substep(const SceneConfig& config) {
-  if (config.integrator.type != IntegratorType::kAuto) return config.integrator.step;
-  return std::min(config.integrator.step, 0.5 * largest_fixed_step(config, auto_integrator(config)));
+/// The step or tolerance a driver runs at: the configured ones, or those auto chose.
+IntegratorSettings effective_settings(const SceneConfig& config) {
+  return config.integrator.type == IntegratorType::kAuto ? auto_settings(config) : config.integrator;
 }
 
 /// True for drivers without a step or tolerance (the closed-form ExactDriver).
@@ -216,9 +232,9 @@ Driver make_driver(const SceneConfig& config) {
   if constexpr (is_closed_form<Driver>::value) {
     return Driver();
   } else if constexpr (Driver::kAdaptive) {
-    return Driver(config.integrator.tolerance);
+    return Driver(effective_settings(config).tolerance);
   } else {
-    return Driver(fixed_substep(config));
+    return Driver(effective_settings(config).step);
   }
 }
 
@@ -301,7 +317,7 @@ std::unique_ptr<Simulator> make_for_model(const SceneConfig& config) {
       if constexpr (!std::is_same_v<Model, Viscous>)
         return make_scene<Model, FixedStepDriver<Model, ReducedGauss6<Model>>>(config);
       break;  // refused by validate()
-    case IntegratorType::kRadau5: return make_scene<Model, FixedStepDriver<Model, RadauIIA5<Model>>>(config);
+    case IntegratorType::kRadau5: return make_scene<Model, AdaptiveDriver<Model, RadauIIA5<Model>>>(config);
     case IntegratorType::kRodas4: return make_scene<Model, FixedStepDriver<Model, Rodas4<Model>>>(config);
     case IntegratorType::kExact:
       if constexpr (!std::is_same_v<Model, Viscous>) return make_scene<Model, ExactDriver<Model>>(config);

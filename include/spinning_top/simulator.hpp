@@ -18,9 +18,9 @@ enum class SceneType { kFixedTip, kFrictionless, kViscous };
 /// dense output of order 7), splitting4/6/8 (fixed
 /// tip only: exact free rotation + gravity kick, composed to order 4/6/8; conserves omega_Z
 /// and L_z exactly, bounded energy error), gauss6 (fixed tip and frictionless: Gauss-Legendre
-/// collocation on (q, Gamma, omega_perp), same invariants), radau5 (Radau IIA order 5, fixed step, L-stable:
-/// stiff friction), rodas4 (L-stable Rosenbrock, fixed step: moderately stiff friction only,
-/// see radau.hpp), exact (fixed tip and frictionless: the closed-form solution by quadrature,
+/// collocation on (q, Gamma, omega_perp), same invariants), radau5 (Radau IIA order 5, adaptive with
+/// Hairer's RADAU5 error estimate, L-stable: stiff friction), rodas4 (L-stable Rosenbrock, fixed step:
+/// moderately stiff friction only, see radau.hpp), exact (fixed tip and frictionless: the closed-form solution by quadrature,
 /// evaluated at each requested time, no step; integrators/exact.hpp). doc/integrators.md
 /// explains the choice.
 enum class IntegratorType {
@@ -39,7 +39,7 @@ IntegratorType parse_integrator(const std::string& name);
 struct IntegratorSettings {
   IntegratorType type = IntegratorType::kAuto;
   double step = 1e-3;        ///< fixed-step methods: largest substep [s]
-  double tolerance = 1e-10;  ///< adaptive methods: relative and absolute local error tolerance
+  double tolerance = 1e-12;  ///< adaptive methods: relative and absolute local error tolerance
 };
 
 /// Throws InvalidParameter unless step and tolerance are positive and finite (and the
@@ -71,16 +71,17 @@ MotionRates motion_rates(const SceneConfig& config);
 /// The largest fixed step [s] that `type` can take on this configuration: 2 / (fastest rate),
 /// i.e. at least pi steps per period of the fastest oscillation, and, for the explicit rk4 in
 /// the viscous scene, 2 / lambda (inside its stability interval, |R(-2)| < 1). Infinity for
-/// the adaptive dopri5 and dop853, for exact (no step) and for auto (which shortens its substep instead). validate() refuses
+/// the adaptive dopri5, dop853 and radau5, for exact (no step) and for auto (which shortens its substep instead). validate() refuses
 /// a larger step with InvalidParameter("step", ...) naming this limit.
 double largest_fixed_step(const SceneConfig& config, IntegratorType type);
 
-/// What `integrator: auto` runs for this configuration (doc/integrators.md, "auto"):
-///   fixed_tip -> splitting6, frictionless -> gauss6 (both geometric), viscous -> radau5 when the
-///   friction time 1/lambda = m / (k (1 + m h^2 / A)) is shorter than radau5's substep (below),
-///   else dop853 (adaptive: at tolerance 1e-10 it takes 4x fewer steps than dopri5 and is 15x
-///   more accurate, doc/integrators.md).
-/// Fixed-step choices run at min(step, largest_fixed_step / 2).
+/// What `integrator: auto` runs for this configuration, with the step or tolerance it runs at
+/// (doc/integrators.md, "auto"): fixed_tip -> splitting6, frictionless -> gauss6 (geometric,
+/// fixed step min(step, largest_fixed_step / 2)); viscous -> dop853, or radau5 when friction is
+/// stiff against the motion (lambda = k (1/m + h^2/A) above a measured multiple of the fastest
+/// motion rate), each at a tolerance derived from `tolerance`. Re-evaluate it after a change of k.
+IntegratorSettings auto_settings(const SceneConfig& config);
+/// auto_settings(config).type.
 IntegratorType auto_integrator(const SceneConfig& config);
 
 /// What a front end shows of the simulation at one instant.
