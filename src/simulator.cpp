@@ -83,6 +83,13 @@ double largest_fixed_step(const SceneConfig& config, IntegratorType type) {
   return fastest > 0.0 ? 2.0 / fastest : std::numeric_limits<double>::infinity();
 }
 
+namespace {
+// auto in the viscous scene: radau5 when lambda = k (1/m + h^2/A) exceeds this many times the
+// fastest motion's rate, at this fraction of the `tolerance` key (dop853 runs at the key itself).
+constexpr double kStiffFrictionRatio = 450.0;
+constexpr double kRadauToleranceFactor = 0.01;
+}  // namespace
+
 AutoPlan auto_plan(const SceneConfig& config) {
   const IntegratorSettings& settings = config.integrator;
   AutoPlan plan;
@@ -91,17 +98,23 @@ AutoPlan auto_plan(const SceneConfig& config) {
     plan.fallback = {IntegratorType::kDop853, settings.step, std::min(settings.tolerance, kAutoFallbackTolerance)};
     return plan;
   }
-  // Viscous: compare the friction time with the substep radau5 would actually take.
-  const double radau5_substep = std::min(settings.step, 0.5 * largest_fixed_step(config, IntegratorType::kRadau5));
-  const double friction_rate = motion_rates(config).friction;
-  const bool stiff = friction_rate * radau5_substep > 1.0;
-  const double friction_time = 1.0 / friction_rate;  // infinite without friction
+  // Viscous: stiff when friction relaxes the slip much faster than the top moves. dop853's step
+  // is then bounded by its stability (|dt lambda| <~ 5) rather than by its accuracy, and radau5,
+  // whose step only the motion bounds, is cheaper: kStiffFrictionRatio is the measured cost
+  // crossover (doc/integrators.md, "Viscous: the default"). radau5's error estimate filters the
+  // stiff components (they are damped), but R reads the slip velocity times k, whose error needs
+  // a tighter tolerance: kRadauToleranceFactor.
+  const MotionRates rates = motion_rates(config);
+  const double motion = rates.fastest_oscillation();
+  const bool stiff = rates.friction > kStiffFrictionRatio * motion;
   plan.first = settings;
   plan.first.type = stiff ? IntegratorType::kRadau5 : IntegratorType::kDop853;
+  if (stiff) plan.first.tolerance = std::max(1e-14, settings.tolerance * kRadauToleranceFactor);
   plan.first.step = std::min(settings.step, 0.5 * largest_fixed_step(config, plan.first.type));
   plan.fallback.type = IntegratorType::kAuto;  // neither refuses a state
-  plan.reason = std::string(stiff ? "stiff" : "not stiff") + ": friction time " + format_seconds(friction_time) +
-                " s " + (stiff ? "<" : ">=") + " substep " + format_seconds(radau5_substep) + " s";
+  plan.reason = std::string(stiff ? "stiff" : "not stiff") + ": friction rate k (1/m + h^2/A) " +
+                format_seconds(rates.friction) + " 1/s " + (stiff ? ">" : "<=") + " " +
+                format_seconds(kStiffFrictionRatio) + " x fastest motion " + format_seconds(motion) + " rad/s";
   return plan;
 }
 

@@ -1,12 +1,18 @@
 // Viscous friction F = -k v_P (PHYSICS.md, "Viscous"): the energy balance dE/dt = -k |v_P|^2
-// (which catches erratum 3, the dropped v_Gz in v_P), k = 0 is the frictionless top, and
-// growing k approaches the fixed tip.
+// (which catches erratum 3, the dropped v_Gz in v_P), k = 0 is the frictionless top, growing k
+// approaches the fixed tip, and the default integrator's accuracy from k = 0 to m/k = 1e-8 s.
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
+#include <memory>
+#include <string>
 
 #include "core_test_support.hpp"
+#include "spinning_top/drivers.hpp"
+#include "spinning_top/integrators/radau.hpp"
+#include "spinning_top/scenes/viscous.hpp"
 
 namespace spinning_top {
 namespace {
@@ -158,6 +164,160 @@ TEST(ViscousLimits, LargeFrictionApproachesTheFixedTipAtFirstOrderInMOverK) {
   EXPECT_GT(d3 / d4, 4.0);
   EXPECT_GT(d4 / d5, 8.0);
   EXPECT_LT(d4 / d5, 12.0);
+}
+
+}  // namespace
+}  // namespace spinning_top
+
+namespace spinning_top {
+namespace {
+using namespace core_test;
+
+// ---------------------------------------------------------------------------------------------
+// The viscous default (integrator: auto, default tolerance) against a reference, asked for a
+// state every 1 ms as the node does. Required: the whole attitude (the rotation angle between
+// the computed and the reference quaternion, azimuth included) within 1e-9 rad and R within
+// 1e-8 m g. References: dop853 at 1e-14 where friction is not stiff (lambda <= 2.5e5 1/s: at
+// most ~3e6 steps), radau5 at 1e-15 above, itself checked against dop853 at 1e-14 over the span
+// that dop853 affords at its stability limit (~1.2e5 / lambda s). bench/viscous_default runs
+// the same comparison over 10 s for every case and prints the figures of doc/integrators.md.
+
+struct DefaultErrors {
+  double attitude = 0.0, normal_force = 0.0, balance = 0.0;  // rad, m g, |E + W - E0| [J]
+  std::string integrator;
+};
+
+/// What the comparison reads of a run at each request time.
+struct Sampled {
+  Event event;
+  Quaternion attitude;
+  double normal_force;
+};
+using Run = std::function<Sampled(double)>;  // advances to t (non-decreasing) and samples
+
+Run simulator_run(const SceneConfig& config, std::string* description = nullptr) {
+  std::shared_ptr<Simulator> sim = make_simulator(config);
+  if (description != nullptr) *description = sim->integrator_description();
+  return [sim](double t) {
+    const Event event = sim->advance_to(t);
+    const Snapshot s = sim->snapshot();
+    return Sampled{event, s.attitude, s.outputs.normal_force};
+  };
+}
+
+/// radau5 at 1e-15 through its driver: below validate()'s 1e-14 floor (radau5's estimate is
+/// mapped to 0.1 tol^(2/3) = 1e-11, far from round-off), 10x tighter than the default's 1e-14.
+Run radau_reference(const SceneConfig& config) {
+  auto model = std::make_shared<Viscous>(config.top, config.initial);
+  auto driver = std::make_shared<AdaptiveDriver<Viscous, RadauIIA5<Viscous>>>(1e-15);
+  driver->reset(*model, 0.0, model->initial_state());
+  return [model, driver](double t) {
+    const Event event = driver->advance_to(*model, t);
+    return Sampled{event, attitude_of(driver->state()), model->normal_force(driver->state())};
+  };
+}
+
+SceneConfig named(SceneConfig c, IntegratorType type, double tolerance) {
+  c.integrator.type = type;
+  c.integrator.tolerance = tolerance;
+  return c;
+}
+
+double friction_rate(const TopParameters& p) {
+  return p.friction * (1.0 / p.mass + p.tip_distance * p.tip_distance / p.inertia_transverse);
+}
+
+/// Largest differences between two runs sampled every 1 ms over `duration`, and the balance
+/// |E + W - E0| of the first (a simulator).
+DefaultErrors compare_runs(const SceneConfig& config, const Run& reference, double duration) {
+  auto sim = make_simulator(config);
+  DefaultErrors e;
+  e.integrator = sim->integrator_description();
+  const double mg = config.top.mass * config.top.gravity, e0 = sim->snapshot().outputs.energy;
+  for (long i = 1; i <= std::lround(duration / 1e-3); ++i) {
+    const Event event = sim->advance_to(i * 1e-3);
+    const Sampled r = reference(i * 1e-3);
+    EXPECT_EQ(event, r.event) << "at t = " << i * 1e-3;
+    if (event != Event::kNone) break;
+    const Snapshot s = sim->snapshot();
+    e.attitude = std::max(e.attitude, attitude_difference(s.attitude, r.attitude));
+    e.normal_force = std::max(e.normal_force, std::abs(s.outputs.normal_force - r.normal_force) / mg);
+    e.balance = std::max(e.balance, std::abs(s.outputs.energy + s.outputs.dissipated_energy - e0));
+  }
+  return e;
+}
+
+/// The default's errors against the reference: dop853 at 1e-14 where friction is not stiff,
+/// radau5 at 1e-15 where it is, itself checked against dop853 at 1e-14 over what dop853 affords.
+DefaultErrors default_errors(const SceneConfig& config, double duration) {
+  const double lambda = friction_rate(config.top);
+  const bool stiff = lambda > 2.5e5;
+  if (stiff) {
+    // Independent check of the stiff reference, to 1e-10 rad and 1e-9 m g (10x below what the
+    // default is held to).
+    const double span = std::min(duration, std::max(2e-3, std::floor(1.2e5 / lambda / 1e-3) * 1e-3));
+    const DefaultErrors check = compare_runs(named(config, IntegratorType::kDop853, 1e-14), radau_reference(config), span);
+    EXPECT_LT(check.attitude, 1e-10) << "dop853 1e-14 vs radau5 1e-15 over " << span << " s";
+    EXPECT_LT(check.normal_force, 1e-9) << "dop853 1e-14 vs radau5 1e-15 over " << span << " s";
+  }
+  SceneConfig run = config;
+  run.integrator = IntegratorSettings();  // the default: auto, default tolerance
+  return compare_runs(run, stiff ? radau_reference(config) : simulator_run(named(config, IntegratorType::kDop853, 1e-14)),
+                      duration);
+}
+
+SceneConfig viscous_toy(double k) {
+  SceneConfig c;
+  c.scene = SceneType::kViscous;
+  c.top.friction = k;
+  c.initial.tilt = 0.3;
+  c.initial.spin = 150.0;
+  return c;
+}
+
+void expect_default_meets_target(const char* name, const SceneConfig& config, double duration) {
+  const DefaultErrors e = default_errors(config, duration);
+  std::printf("[ measured ] %s, k = %g, %g s (%s): attitude %.2g rad, R %.2g m g, |E + W - E0| %.2g J\n", name,
+              config.top.friction, duration, e.integrator.c_str(), e.attitude, e.normal_force, e.balance);
+  EXPECT_LE(e.attitude, 1e-9) << name << ", k = " << config.top.friction;
+  EXPECT_LE(e.normal_force, 1e-8) << name << ", k = " << config.top.friction;
+  // The energy balance holds to the integration error (dE/dt = -k |v_P|^2 integrated in W):
+  // measured at most 1.2e-13 J; 1e-10 of the toy's m g h (2e-12 J, G 2 pm lower) is far below
+  // any physical effect and catches a work integral off by one step's worth.
+  EXPECT_LE(e.balance, 2e-12) << name << ", k = " << config.top.friction;
+}
+
+TEST(ViscousDefault, MeetsOneNanoradianAndTenNanoMgOverTenSecondsAtEveryK) {
+  // From no friction to m/k = 1e-8 s (lambda = 2e8 1/s). Measured figures: doc/integrators.md.
+  for (const double k : {0.0, 0.02, 0.5, 5.0, 50.0, 500.0, 5e3, 5e4, 1e5, 1e6, 1e7})
+    expect_default_meets_target("toy top", viscous_toy(k), 10.0);
+}
+
+TEST(ViscousDefault, MeetsTheTargetForUnusualTopsAndStates) {
+  // One mild and one stiff k each; 2 s (0.5 s at 2000 rad/s, where 10 s of reference cost
+  // ~10 s of CPU and the references themselves agree only to ~1e-9 rad after 1e4 rad of spin).
+  for (const double k : {0.5, 1e5}) {
+    SceneConfig c = viscous_toy(k);
+    c.top.tip_distance = 0.0;  // torque-free: the error is all azimuth and phase
+    expect_default_meets_target("h = 0", c, 2.0);
+    c = viscous_toy(k);
+    c.initial.spin = 2000.0;
+    expect_default_meets_target("fast spin 2000 rad/s", c, 0.5);
+    c = viscous_toy(k);
+    c.initial.tilt = 1.4835298641951802;  // 85 deg
+    expect_default_meets_target("near horizontal", c, 2.0);
+    c = viscous_toy(k);
+    c.top.inertia_axial = 1.9 * c.top.inertia_transverse;
+    expect_default_meets_target("disk-like C = 1.9 A", c, 2.0);
+    c = viscous_toy(k);
+    c.top.inertia_axial = 8e-7;  // falls (event compared with the reference's)
+    expect_default_meets_target("rod-like C = 0.02 A", c, 2.0);
+    c = viscous_toy(k);
+    c.initial.velocity_x = 0.1;  // the tip slides at first: an initial layer of length 1/lambda
+    c.initial.precession_rate = 5.0;
+    c.initial.nutation_rate = 2.0;
+    expect_default_meets_target("initial slip 0.1 m/s", c, 2.0);
+  }
 }
 
 }  // namespace

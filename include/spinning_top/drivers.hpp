@@ -14,6 +14,7 @@
 #include <stdexcept>
 #include <string>
 #include <type_traits>
+#include <utility>
 
 #include "spinning_top/events.hpp"
 #include "spinning_top/hot_path.hpp"
@@ -132,6 +133,13 @@ template <class Method>
 struct has_lazy_dense_output<Method, std::void_t<decltype(Method::kLazyDense)>>
     : std::bool_constant<Method::kLazyDense> {};
 
+/// True for methods that keep state from step to step (RADAU5: Jacobian, LU decompositions,
+/// Newton's starting guess): the driver's reset() restarts them.
+template <class Method, class = void>
+struct has_restart : std::false_type {};
+template <class Method>
+struct has_restart<Method, std::void_t<decltype(std::declval<Method&>().restart())>> : std::true_type {};
+
 template <class Model, class Method>
 class AdaptiveDriver : public DriverBase<Model> {
  public:
@@ -145,6 +153,7 @@ class AdaptiveDriver : public DriverBase<Model> {
   /// (Re)starts the integration at (t, y); the step size is chosen afresh.
   void reset(const Model& model, double t, const State& y) {
     this->start(model, t, y);
+    if constexpr (has_restart<Method>::value) method_.restart();
     t_ = t;
     y_ = this->y_out_;
     model.derivative(y_, f_);
@@ -158,6 +167,8 @@ class AdaptiveDriver : public DriverBase<Model> {
   double tolerance() const { return tolerance_; }
   /// The per-step event check (its counts of searched steps: the cost of the events).
   const EventMonitor<Model>& event_monitor() const { return monitor_; }
+  /// The method and its work counters (e.g. RadauIIA5::statistics()).
+  const Method& method() const { return method_; }
   /// The size of the last accepted step [s] (0 before the first).
   double last_step() const { return has_dense_ ? dense_.dt : 0.0; }
   std::string description() const {

@@ -32,7 +32,7 @@ IntegratorType parse_integrator(const std::string& name);
 struct IntegratorSettings {
   IntegratorType type = IntegratorType::kAuto;
   double step = 1e-3;        ///< fixed-step methods: largest substep [s]
-  double tolerance = 1e-10;  ///< adaptive methods: relative and absolute local error tolerance
+  double tolerance = 1e-12;  ///< adaptive methods: relative and absolute local error tolerance
 };
 
 /// Throws InvalidParameter unless step and tolerance are positive and finite (and the
@@ -84,9 +84,10 @@ constexpr double kAutoFallbackTolerance = 1e-12;
 /// auto's rule:
 ///   fixed_tip, frictionless -> exact (the closed form: round-off accuracy, no step), falling back
 ///     to dop853 at min(tolerance, kAutoFallbackTolerance) for a state exact refuses;
-///   viscous -> radau5 when the friction time 1/lambda = m / (k (1 + m h^2 / A)) is shorter than
-///     radau5's substep, else dop853 at `tolerance` (not stiff: at 1e-10 it takes 4x fewer steps
-///     than dopri5 and is 15x more accurate, doc/integrators.md).
+///   viscous -> radau5 at tolerance/100 (min 1e-14) when friction is stiff against the motion
+///     (lambda = k (1/m + h^2/A) > 450 times the fastest motion's rate: dop853's step would then
+///     be bounded by its stability, not its accuracy; the measured cost crossover), else dop853
+///     at `tolerance` (doc/integrators.md, "Viscous: the default").
 /// Fixed-step choices run at min(step, largest_fixed_step / 2): auto is never refused a step.
 AutoPlan auto_plan(const SceneConfig& config);
 
@@ -129,7 +130,7 @@ class Simulator {
   /// returns true if it switched method; time and state continue across the switch.
   virtual bool update(const TopParameters& top, const IntegratorSettings& integrator) = 0;
   virtual const SceneConfig& config() const = 0;
-  /// What runs and why, e.g. "dopri5, tolerance 1e-10", "rk4, step 0.001 s" or, for auto,
+  /// What runs and why, e.g. "dopri5, tolerance 1e-12", "rk4, step 0.001 s" or, for auto,
   /// "auto: exact: closed form, nutation period 0.0559 s, 12 Fourier terms" or
   /// "auto: dop853, tolerance 1e-12 (exact refused: <its reason>)".
   virtual std::string integrator_description() const = 0;

@@ -32,3 +32,25 @@ void finite_difference_jacobian(const Model& model, const typename Model::State&
 }
 
 }  // namespace spinning_top
+
+namespace spinning_top {
+
+/// df/dy by forward differences from a known f(y): n evaluations of f, error ~ sqrt(eps) of
+/// |J| at delta = sqrt(eps max(1e-5, |y_j|)) (radau5.f's increment). Enough where J only
+/// drives Newton's iteration and filters an error estimate (RADAU5), not the order (RODAS).
+template <class Model>
+void forward_difference_jacobian(const Model& model, const typename Model::State& y, const typename Model::State& f,
+                                 Eigen::Matrix<double, Model::kStateSize, Model::kStateSize>& jacobian) {
+  using State = typename Model::State;
+  const double eps = std::numeric_limits<double>::epsilon();
+  State shifted = y, f_shifted;
+  for (int c = 0; c < Model::kStateSize; ++c) {
+    const double delta = std::sqrt(eps * std::max(1e-5, std::abs(y[c])));
+    shifted[c] = y[c] + delta;
+    model.derivative(shifted, f_shifted);
+    jacobian.col(c) = (f_shifted - f) / (shifted[c] - y[c]);
+    shifted[c] = y[c];
+  }
+}
+
+}  // namespace spinning_top

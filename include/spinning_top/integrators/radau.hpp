@@ -1,25 +1,60 @@
-// Radau IIA of order 5 (3 stages): the fully implicit, L-stable, stiffly accurate collocation
-// method of Hairer's RADAU5 (Hairer & Wanner, Solving ODEs II, 2nd ed. 1996, sec. IV.5,
-// Table 5.6 and sec. IV.8), here at a fixed step with Newton's method on the stage equations
-//   Z = dt (A x I) F(Z),  F(Z)_i = f(y0 + Z_i),  y1 = y0 + Z_3.
-// Why not only a Rosenbrock method for the viscous top: friction relaxes v_P at the rate
-// lambda = k (1/m + h^2/A), but the stiff direction in the state (q, omega_X, omega_Y, v_G)
-// turns with the body at the spin rate (v_P = v_G - h (omega_Y e_X - omega_X e_Y)): over a
-// 1 ms step at 150 rad/s by 0.15 rad. A linearly implicit method freezes J at the step's start
-// and takes the mismatch, 0.15 lambda, explicitly: RODAS4 blows up for lambda dt >~ 1e2
-// (measured). Newton's iteration instead converges to the implicit solution, whose stability
-// function is that of Radau IIA (R(inf) = 0): the friction transient is damped in one step
-// and the solution lies on the slow manifold (the fixed-tip limit as k -> inf).
+// RADAU5: the 3-stage Radau IIA method of order 5 (fully implicit, L-stable, stiffly accurate
+// collocation) with Hairer's embedded error estimate, step-size control and continuous output
+// (Hairer & Wanner, Solving ODEs II, 2nd ed. 1996, sec. IV.5 Table 5.6 and sec. IV.8; the
+// Fortran code radau5.f, whose structure SciPy's integrate/_ivp/radau.py follows). It is a
+// Method of AdaptiveDriver (drivers.hpp): restart / attempt / prepare_dense / complete_dense /
+// dense; a Newton failure reports a non-finite error, and the driver shrinks the step.
+//
+// Stage equations Z = h (A x I) F(Z), F(Z)_i = f(y0 + Z_i), y1 = y0 + Z_3, solved by simplified
+// Newton in the eigenbasis of A^-1 (W = (T^-1 x I) Z): one real n x n system with
+// (gamma/h I - J) and one complex one with ((alpha - i beta)/h I - J) per iteration, sec. IV.8.
+// As in radau5.f, J and the LU decompositions are kept across steps: J is recomputed only
+// when Newton contracted slowly in the last accepted step (rate > 1e-3), after a rejection or
+// a Newton failure with an older J; the LUs only when h or J changed.
+//
+// Why the viscous top needs this: friction relaxes v_P at the rate lambda = k (1/m + h^2/A)
+// (PHYSICS.md erratum 9), up to 2e8 1/s. The stiff direction (v_P = v_G - h (omega_Y e_X -
+// omega_X e_Y)) turns with the body at the spin rate, so a linearly implicit method (RODAS,
+// J frozen at the step's start) blows up for lambda dt >~ 1e2; Newton's iteration converges
+// to the implicit solution, whose stability function is Radau IIA's (R(inf) = 0).
+//
+// Where this differs from radau5.f, each measured to be needed (doc/integrators.md, "Viscous"):
+//  1. Per-stage Jacobians. One J for all three stages contracts only while h^2 lambda omega_Z
+//     is small (the stiff direction turns between the stages): with it alone the steps were
+//     limited by Newton failures to ~18 us at k = 1e7. When the simplified Newton fails with a
+//     fresh J, the step is solved by Newton with a Jacobian per stage (decompose_per_stage(), by
+//     block elimination), and the simplified one is tried again after 16, 32, ... 256 steps.
+//  2. Newton to round-off. R = m (g + ...) - alpha n.F reads F = -k v_P: an error dv_P in the
+//     state is an error k dv_P in R (k = 1e7 N s/m: 1e-15 m/s is 1e-8 N).
+//  3. Requests inside a step are answered by collocation steps from the step's start (dense()),
+//     not by the collocation cubic (radau5.f's CONTR5): the cubic's error is O(h^4), against
+//     the steps' O(h^6), and it interpolates q, omega and v_G separately, so v_P between the
+//     stages leaves the slow manifold, R off by 3e-7 m g at k = 1e5 (test_radau).
+//  4. The driver's PI controller (drivers.hpp) replaces Gustafsson's predictive one: it rejects
+//     few steps here (test_radau), and the driver stays common to all methods.
 #pragma once
 
 #include <Eigen/Core>
 #include <Eigen/LU>
+#include <algorithm>
 #include <cmath>
+#include <complex>
 #include <limits>
 
 #include "spinning_top/integrators/jacobian.hpp"
 
 namespace spinning_top {
+
+/// Work counters of a RadauIIA5 (for the benchmark and the tests).
+struct RadauStatistics {
+  long attempts = 0;           ///< step attempts (accepted or not)
+  long newton_iterations = 0;  ///< in steps and dense outputs
+  long newton_failures = 0;    ///< attempts whose Newton iteration did not converge
+  long jacobians = 0;          ///< finite-difference Jacobians
+  long decompositions = 0;     ///< Newton matrices factorized (a real + complex LU pair, or per stage)
+  long dense_solves = 0;       ///< partial collocation steps for requests inside a step
+  long per_stage_attempts = 0; ///< attempts solved by the per-stage Newton
+};
 
 template <class Model>
 class RadauIIA5 {
@@ -28,110 +63,548 @@ class RadauIIA5 {
   static constexpr int kN = Model::kStateSize;
   static constexpr int kStages = 3;
   static constexpr int kOrder = 5;
+  // The estimate err is O(h^4) (an embedded order-3 solution, sec. IV.8). attempt() reports it
+  // through radau5.f's tolerance map (estimate_error()), as a vector whose norm scales as
+  // err^(3/2), i.e. as h^6: the driver's exponent 1 / (kEmbeddedOrder + 1) = 1/6 is radau5.f's
+  // 1/4 on err.
+  static constexpr int kEmbeddedOrder = 5;
+  static constexpr bool kLazyDense = true;  // dense() needs complete_dense() first
   static constexpr const char* kName = "radau5";
 
-  /// One step; a step whose Newton iteration does not converge is taken as two half steps
-  /// (at most kMaxHalvings deep), and as NaN beyond (the driver reports non_finite).
-  void step(const Model& model, State& y, double dt) { step_recursive(model, y, dt, 0); }
+  using Jacobian = Eigen::Matrix<double, kN, kN>;
+  using Stages = Eigen::Matrix<double, kN, kStages>;  // Z_1, Z_2, Z_3 as columns
 
-  /// Newton iterations of the last step (diagnostics and tests).
-  int last_iterations() const { return iterations_; }
+  struct Attempt {
+    State y1;     // y0 + Z_3 (stiffly accurate)
+    State f1;     // f(y1)
+    State error;  // a vector whose RMS norm over tolerance (1 + |y|) is radau5.f's err (estimate_error())
+  };
+
+  struct DenseStep {
+    State y0, y1;
+    Stages polynomial;  // y(t0 + x dt) = y0 + sum_k polynomial.col(k) x^(k+1): the collocation cubic
+    double t0 = 0.0, dt = 0.0;
+    bool per_stage_newton = false;  // how the step's stages were solved
+    // Filled by complete_dense() for the partial collocation steps of dense(): the step's J
+    // (simplified Newton), or J at c = 0, c1, c2, 1 (per-stage Newton), interpolated in between.
+    Jacobian jacobians[kStages + 1];
+    const Model* model = nullptr;
+    RadauStatistics* statistics = nullptr;
+  };
+
+  /// Starts a run (the driver's reset): no Jacobian, no starting guess, counters at zero.
+  void restart() {
+    statistics_ = RadauStatistics();
+    have_jacobian_ = have_predictor_ = attempt_pending_ = jacobian_is_fresh_ = false;
+    per_stage_newton_ = used_per_stage_ = returned_to_simplified_ = false;
+    per_stage_run_ = kPerStageNewtonSteps;
+    real_step_ = complex_step_ = 0.0;
+    contraction_ = kJacobianReuseRate;
+    faccon_ = 1.0;
+    first_step_ = true;
+  }
+
+  const RadauStatistics& statistics() const { return statistics_; }
+
+  void attempt(const Model& model, const State& y0, const State& f0, double dt, Attempt& out) {
+    ++statistics_.attempts;
+    // An attempt without an accepted step since the last one follows a rejection: as radau5.f,
+    // do not retry with a Jacobian older than this step.
+    const bool after_rejection = attempt_pending_;
+    attempt_pending_ = true;
+    if (after_rejection && !jacobian_is_fresh_) have_jacobian_ = false;
+    const State scale = (1.0 + y0.cwiseAbs().array()).matrix();
+    Stages guess;
+    starting_guess(dt, guess);
+    Stages z = guess;
+    bool converged = false;
+    used_per_stage_ = false;
+    if (!per_stage_newton_) {
+      for (;;) {
+        if (!have_jacobian_) fresh_jacobian(model, y0, f0);
+        if (dt != real_step_ || dt != complex_step_) {
+          decompose(jacobian_, dt, lu_);
+          real_step_ = complex_step_ = dt;
+          ++statistics_.decompositions;
+        }
+        z = guess;
+        const NewtonOutcome outcome = solve_stages(model, y0, dt, lu_, scale, z, faccon_);
+        statistics_.newton_iterations += outcome.iterations;
+        if (outcome.converged) {
+          contraction_ = outcome.contraction;
+          converged = true;
+          break;
+        }
+        ++statistics_.newton_failures;
+        if (jacobian_is_fresh_) break;
+        have_jacobian_ = false;  // radau5.f: a new J at y0 before anything else
+      }
+      if (!converged) {  // the stiff subspace turns too much within the step (header comment)
+        per_stage_newton_ = true;
+        // Each failed return doubles the wait, up to kMaxPerStageRun steps: a persistently stiff
+        // run pays for the simplified trial in at most 1 step in 256.
+        per_stage_run_ = returned_to_simplified_ ? std::min(2 * per_stage_run_, kMaxPerStageRun) : kPerStageNewtonSteps;
+        per_stage_steps_left_ = per_stage_run_;
+      }
+      returned_to_simplified_ = false;
+    }
+    if (!converged) {
+      if (!have_jacobian_) fresh_jacobian(model, y0, f0);  // for the error estimate
+      used_per_stage_ = true;
+      ++statistics_.per_stage_attempts;
+      z = guess;
+      for (int pass = 0; pass < 2 && !converged; ++pass) {
+        // Jacobians at the starting guess; if Newton fails from there, at its last iterate.
+        Stages f;
+        stage_jacobians(model, y0, z, stage_jacobians_, f);
+        statistics_.jacobians += kStages;
+        decompose_per_stage(stage_jacobians_, dt, per_stage_lu_);
+        ++statistics_.decompositions;
+        const NewtonOutcome outcome = solve_stages_per_stage(model, y0, per_stage_lu_, scale, z, f, faccon_);
+        statistics_.newton_iterations += outcome.iterations;
+        converged = outcome.converged;
+        if (!converged) ++statistics_.newton_failures;
+      }
+      if (!converged) {
+        // Non-finite error: the driver rejects the step and shrinks it (by its largest factor).
+        out.y1 = y0;
+        out.f1 = f0;
+        out.error.setConstant(std::numeric_limits<double>::quiet_NaN());
+        return;
+      }
+      if (dt != real_step_) {
+        lu_.real.compute(Jacobian::Identity() * (kGamma / dt) - jacobian_);
+        real_step_ = dt;
+      }
+    }
+    z_ = z;
+    out.y1 = y0 + z.col(2);
+    model.derivative(out.y1, out.f1);
+    estimate_error(model, y0, f0, out.y1, dt, z, first_step_ || after_rejection, out.error);
+  }
+
+  /// The step just attempted is accepted: keep its stages (the next step's starting guess and
+  /// the continuous output), and decide whether the next step needs a new Jacobian.
+  void prepare_dense(const State& y0, const State& /*f0*/, const Attempt& a, double t0, double dt, DenseStep& d) {
+    attempt_pending_ = false;
+    first_step_ = false;
+    jacobian_is_fresh_ = false;
+    d.per_stage_newton = used_per_stage_;
+    if (used_per_stage_) {
+      jacobian_at_start_ = jacobian_;
+      // J at stage 3 is J near the next step's start, for its error estimate; after
+      // kPerStageNewtonSteps steps the simplified Newton is tried again, with a fresh J.
+      jacobian_ = stage_jacobians_[kStages - 1];
+      real_step_ = complex_step_ = 0.0;
+      if (--per_stage_steps_left_ <= 0) {
+        per_stage_newton_ = false;
+        returned_to_simplified_ = true;
+        have_jacobian_ = false;
+      }
+    } else if (contraction_ > kJacobianReuseRate) {
+      have_jacobian_ = false;  // radau5.f's THET
+    }
+    d.y0 = y0;
+    d.y1 = a.y1;
+    d.polynomial = z_ * kDensePolynomial;
+    d.t0 = t0;
+    d.dt = dt;
+    previous_polynomial_ = d.polynomial;
+    previous_step_ = dt;
+    have_predictor_ = true;
+  }
+
+  /// Second part of the continuous output, for a step where a request falls: the step's
+  /// Jacobian and the model, for dense()'s partial collocation steps. Must come before the
+  /// next attempt() (which may replace the Jacobian).
+  void complete_dense(const Model& model, DenseStep& d) {
+    d.jacobians[0] = used_per_stage_ ? jacobian_at_start_ : jacobian_;
+    if (used_per_stage_)
+      for (int i = 0; i < kStages; ++i) d.jacobians[i + 1] = stage_jacobians_[i];
+    d.model = &model;
+    d.statistics = &statistics_;
+  }
+
+  /// y(t0 + tau), 0 < tau < dt: the Radau IIA step of length tau from y0, Newton started from
+  /// the collocation cubic, solved as the step was (simplified, else per-stage Newton). The
+  /// ends of the step are returned as computed.
+  /// y(t0 + tau), 0 < tau <= dt: the collocation step of length 3 tau / 4 from y0, then one of
+  /// tau / 4 (Newton started from the collocation cubic, solved as the step was). Why two: the
+  /// slip velocity at the end of a collocation step of length s carries an O(s^3) error (stage
+  /// order 3) that R reads times k, so the last, short step sets it 64x smaller, and damps the
+  /// first one's by its stability function (measured: R 2e-9 -> 7e-11 m g at k = 1e5, 1e-13).
+  static State dense(const DenseStep& d, double t) {
+    const double tau = t - d.t0;
+    if (!(tau > 0.0)) return d.y0;
+    const double x = std::min(1.0, tau / d.dt);
+    if (d.model == nullptr) return collocation_polynomial(d, x);
+    const double x_split = x * (1.0 - kFinalSubstepFraction);
+    State y_split, y;
+    // The whole step from y0 converged, so shorter ones do too; should they not, the cubic is
+    // the fallback (its error is O(h^4), header comment).
+    if (!partial_step(d, d.y0, 0.0, x_split, y_split) || !partial_step(d, y_split, x_split, x, y))
+      return collocation_polynomial(d, x);
+    return y;
+  }
+
+  /// The collocation step from y_start at t0 + x_start dt to t0 + x_end dt (x in [0, 1] of the
+  /// step), Newton started from the collocation cubic, solved as the step was (simplified, else
+  /// per-stage Newton). False if Newton does not converge.
+  static bool partial_step(const DenseStep& d, const State& y_start, double x_start, double x_end, State& y_end) {
+    const double tau = (x_end - x_start) * d.dt;
+    Stages guess;
+    const State start = polynomial_at(d.polynomial, x_start);
+    for (int i = 0; i < kStages; ++i)
+      guess.col(i) = polynomial_at(d.polynomial, x_start + kC[i] * (x_end - x_start)) - start;
+    const State scale = (1.0 + y_start.cwiseAbs().array()).matrix();
+    double faccon = 1.0;
+    Stages z = guess;
+    NewtonOutcome outcome;
+    long decompositions = 0;
+    if (!d.per_stage_newton) {
+      Factorization lu;
+      decompose(d.jacobians[0], tau, lu);
+      ++decompositions;
+      outcome = solve_stages(*d.model, y_start, tau, lu, scale, z, faccon);
+    }
+    int iterations = outcome.iterations;
+    if (!outcome.converged) {
+      Jacobian j[kStages];
+      Stages f;
+      z = guess;
+      if (d.per_stage_newton) {
+        // J at the partial step's stages from the step's four, by cubic interpolation in time:
+        // its error, O((omega h)^4), is far below what Newton's contraction needs.
+        for (int i = 0; i < kStages; ++i)
+          interpolate_jacobian(d.jacobians, x_start + kC[i] * (x_end - x_start), j[i]);
+        State fi;
+        for (int i = 0; i < kStages; ++i) {
+          d.model->derivative(State(y_start + z.col(i)), fi);
+          f.col(i) = fi;
+        }
+      } else {
+        stage_jacobians(*d.model, y_start, z, j, f);
+      }
+      PerStageFactorization lu;
+      decompose_per_stage(j, tau, lu);
+      ++decompositions;
+      faccon = 1.0;
+      outcome = solve_stages_per_stage(*d.model, y_start, lu, scale, z, f, faccon);
+      iterations += outcome.iterations;
+    }
+    if (d.statistics != nullptr) {
+      ++d.statistics->dense_solves;
+      d.statistics->decompositions += decompositions;
+      d.statistics->newton_iterations += iterations;
+      if (!outcome.converged) ++d.statistics->newton_failures;
+    }
+    y_end = y_start + z.col(2);
+    return outcome.converged;
+  }
+
+  /// radau5.f's CONTR5: the collocation cubic through y0 and the three stages, x in [0, 1].
+  static State collocation_polynomial(const DenseStep& d, double x) { return d.y0 + polynomial_at(d.polynomial, x); }
 
  private:
-  using Stages = Eigen::Matrix<double, kStages * kN, 1>;
-  using NewtonMatrix = Eigen::Matrix<double, kStages * kN, kStages * kN>;
-  using Jacobian = Eigen::Matrix<double, kN, kN>;
-  static constexpr int kMaxIterations = 12, kMaxHalvings = 6;
-  static constexpr double kTolerance = 1e-13;
+  using RealLU = Eigen::PartialPivLU<Jacobian>;
+  using ComplexMatrix = Eigen::Matrix<std::complex<double>, kN, kN>;
+  using ComplexState = Eigen::Matrix<std::complex<double>, kN, 1>;
+  using ComplexLU = Eigen::PartialPivLU<ComplexMatrix>;
+  struct Factorization {
+    RealLU real;
+    ComplexLU complex;
+  };
+  /// Newton's matrix with a Jacobian per stage, written as (A^-1/h x I) - diag(J_1, J_2, J_3):
+  /// its off-diagonal blocks are multiples of I, so block elimination costs three n x n
+  /// factorizations and two products instead of one 3n x 3n LU (2.5x fewer operations). The
+  /// pivots' scalar parts are A^-1's leading Schur complements, 3.22, 2.07 and 9.0, all
+  /// positive, so the elimination needs no pivoting between blocks.
+  struct PerStageFactorization {
+    double beta[kStages][kStages];  // A^-1 / h
+    Jacobian first_inverse;         // (beta_11 I - J_1)^-1
+    Jacobian second_inverse;        // S_22^-1 after eliminating stage 1
+    Jacobian s23, s32;              // couplings of stages 2 and 3 after eliminating stage 1
+    RealLU last;                    // S_33 - S_32 S_22^-1 S_23
+  };
+  struct NewtonOutcome {
+    bool converged = false;
+    int iterations = 0;
+    double contraction = 0.0;
+  };
 
-  void step_recursive(const Model& model, State& y, double dt, int depth) {
-    State y1 = y;
-    if (solve_stages(model, y, dt, y1)) {
-      y = y1;
-      return;
-    }
-    if (depth >= kMaxHalvings) {
-      y.setConstant(std::numeric_limits<double>::quiet_NaN());
-      return;
-    }
-    step_recursive(model, y, 0.5 * dt, depth + 1);
-    step_recursive(model, y, 0.5 * dt, depth + 1);
+  static constexpr int kMaxNewtonIterations = 7;      // radau5.f's NIT
+  static constexpr double kJacobianReuseRate = 1e-3;  // radau5.f's THET
+  static constexpr int kPerStageNewtonSteps = 16;     // steps before the simplified Newton is tried again
+  static constexpr int kMaxPerStageRun = 256;
+  static constexpr double kFinalSubstepFraction = 0.25;  // of a request's partial steps (dense())
+  // Newton stops when the estimated remaining error theta/(1-theta) |dZ| (RMS over 1 + |y0|)
+  // is below kNewtonTolerance, or when the corrections stop contracting below kRoundOffFloor:
+  // the stage values are then exact to round-off, which R needs at large k (header comment, 1.).
+  static constexpr double kNewtonTolerance = 1e-15;
+  static constexpr double kRoundOffFloor = 1e-14;
+
+  void fresh_jacobian(const Model& model, const State& y0, const State& f0) {
+    forward_difference_jacobian(model, y0, f0, jacobian_);
+    ++statistics_.jacobians;
+    have_jacobian_ = jacobian_is_fresh_ = true;
+    real_step_ = complex_step_ = 0.0;
   }
 
-  /// Newton's method on G(Z) = Z - dt (A x I) F(Z) = 0 from Z = 0. The matrix
-  /// I - dt (A x I) diag(J_i) starts with J_i = J(y0) (simplified Newton); if the iteration
-  /// contracts slowly (the stiff direction turned within the step), it is rebuilt with the
-  /// Jacobians at the current stage values, which restores Newton's fast convergence.
-  bool solve_stages(const Model& model, const State& y0, double dt, State& y1) {
-    Stages z = Stages::Zero(), f_stages, residual;
-    Jacobian j0;
-    finite_difference_jacobian(model, y0, j0);
-    const double stiffness = dt * j0.cwiseAbs().rowwise().sum().maxCoeff();  // dt |J|_inf
-    NewtonMatrix matrix;
-    build_matrix(dt, {j0, j0, j0}, matrix);
-    Eigen::PartialPivLU<NewtonMatrix> lu(matrix);
-    double previous_norm = 0.0;
-    State scale = (1.0 + y0.cwiseAbs().array()).matrix();
-    for (iterations_ = 1; iterations_ <= kMaxIterations; ++iterations_) {
-      evaluate_stages(model, y0, z, f_stages);
-      residual = z;
-      for (int i = 0; i < kStages; ++i)
-        for (int j = 0; j < kStages; ++j) residual.template segment<kN>(i * kN) -= dt * kA[i][j] * f_stages.template segment<kN>(j * kN);
-      const Stages correction = lu.solve(-residual);
-      if (!correction.allFinite()) return false;
-      z += correction;
-      double norm = 0.0;
-      for (int i = 0; i < kStages; ++i)
-        norm = std::max(norm, correction.template segment<kN>(i * kN).cwiseQuotient(scale).cwiseAbs().maxCoeff());
-      // Converged when the remaining error, estimated from the contraction rate, is at
-      // round-off of the state (far below the method's own truncation error), or when the
-      // corrections stop shrinking at round-off level.
-      const double contraction = previous_norm > 0.0 ? norm / previous_norm : 1.0;
-      if (norm <= kTolerance) break;
-      if (iterations_ >= 2 && contraction < 1.0 && contraction / (1.0 - contraction) * norm <= kTolerance) break;
-      if (iterations_ >= 3 && contraction >= 1.0 && norm <= 1e3 * kTolerance) break;
-      // Stiff (|J| dt >> 1): the first iteration has put the stage attitudes in place (they
-      // are not stiff), so the stiff directions are now known at the stages; refactor there
-      // once rather than let J(y0)'s turned stiff subspace push the iterate far away.
-      const bool stiff_first_iteration = iterations_ == 1 && stiffness > 10.0;
-      if (stiff_first_iteration || (iterations_ >= 2 && contraction > 0.3)) {
-        Jacobian j1, j2, j3;
-        finite_difference_jacobian(model, State(y0 + z.template segment<kN>(0)), j1);
-        finite_difference_jacobian(model, State(y0 + z.template segment<kN>(kN)), j2);
-        finite_difference_jacobian(model, State(y0 + z.template segment<kN>(2 * kN)), j3);
-        build_matrix(dt, {j1, j2, j3}, matrix);
-        lu.compute(matrix);
+  static void decompose(const Jacobian& j, double h, Factorization& lu) {
+    lu.real.compute(Jacobian::Identity() * (kGamma / h) - j);
+    const std::complex<double> shift(kAlpha / h, -kBeta / h);
+    lu.complex.compute(ComplexMatrix::Identity() * shift - j.template cast<std::complex<double>>());
+  }
+
+  static State polynomial_at(const Stages& q, double x) { return x * (q.col(0) + x * (q.col(1) + x * q.col(2))); }
+
+  /// radau5.f: zero for the first step; else the previous step's collocation cubic, extrapolated.
+  void starting_guess(double dt, Stages& z) const {
+    if (!have_predictor_) {
+      z.setZero();
+      return;
+    }
+    const State end = polynomial_at(previous_polynomial_, 1.0);
+    for (int i = 0; i < kStages; ++i)
+      z.col(i) = polynomial_at(previous_polynomial_, 1.0 + kC[i] * dt / previous_step_) - end;
+  }
+
+  /// Newton's stopping rule, common to both iterations (radau5.f's, with the round-off ends
+  /// above): updates theta and faccon from the correction norms; returns +1 converged, -1 failed,
+  /// 0 go on.
+  static int newton_verdict(int iteration, double norm, double& previous_norm, double& previous_rate, double& theta,
+                            double& faccon) {
+    if (iteration > 1) {
+      const double rate = norm / previous_norm;
+      theta = iteration == 2 ? rate : std::sqrt(rate * previous_rate);
+      previous_rate = rate;
+      if (theta < 0.99) {
+        faccon = theta / (1.0 - theta);
+      } else if (norm > kRoundOffFloor) {
+        return -1;  // diverging
       }
-      previous_norm = norm;
-      if (iterations_ == kMaxIterations) return false;
     }
-    y1 = y0 + z.template segment<kN>(2 * kN);  // stiffly accurate: y1 = Y_3
-    return y1.allFinite();
+    const bool at_round_off = norm <= kRoundOffFloor && (theta >= 0.5 || iteration == kMaxNewtonIterations);
+    if (faccon * norm <= kNewtonTolerance || norm == 0.0 || at_round_off) return +1;
+    previous_norm = std::max(norm, std::numeric_limits<double>::min());
+    return iteration == kMaxNewtonIterations ? -1 : 0;
   }
 
-  void evaluate_stages(const Model& model, const State& y0, const Stages& z, Stages& f) const {
+  /// Simplified Newton on the stage equations in the transformed variables W = T^-1 Z (sec.
+  /// IV.8, eq. 8.16-8.19): one real and one complex n x n solve per iteration, all stages with
+  /// J(y0). faccon carries theta/(1-theta) from the last solve (radau5.f).
+  static NewtonOutcome solve_stages(const Model& model, const State& y0, double h, const Factorization& lu,
+                                    const State& scale, Stages& z, double& faccon) {
+    NewtonOutcome outcome;
+    Stages w = z * kTInverse.transpose(), f;
+    faccon = std::pow(std::max(faccon, std::numeric_limits<double>::epsilon()), 0.8);
+    double previous_norm = 0.0, previous_rate = 0.0, theta = kJacobianReuseRate;
+    State fi;
+    const std::complex<double> shift(kAlpha / h, -kBeta / h), i_unit(0.0, 1.0);
+    for (int iteration = 1; iteration <= kMaxNewtonIterations; ++iteration) {
+      outcome.iterations = iteration;
+      for (int i = 0; i < kStages; ++i) {
+        model.derivative(State(y0 + z.col(i)), fi);
+        f.col(i) = fi;
+      }
+      if (!f.allFinite()) return outcome;
+      const Stages tf = f * kTInverse.transpose();  // columns: (T^-1 F)_k
+      const State real_rhs = tf.col(0) - (kGamma / h) * w.col(0);
+      const ComplexState complex_rhs = tf.col(1).template cast<std::complex<double>>() + i_unit * tf.col(2) -
+                                       shift * (w.col(1).template cast<std::complex<double>>() + i_unit * w.col(2));
+      Stages dw;
+      dw.col(0) = lu.real.solve(real_rhs);
+      const ComplexState dc = lu.complex.solve(complex_rhs);
+      dw.col(1) = dc.real();
+      dw.col(2) = dc.imag();
+      if (!dw.allFinite()) return outcome;
+      const double norm = rms(dw, scale);
+      w += dw;
+      z = w * kT.transpose();
+      const int verdict = newton_verdict(iteration, norm, previous_norm, previous_rate, theta, faccon);
+      if (verdict != 0) {
+        outcome.converged = verdict > 0;
+        outcome.contraction = theta;
+        return outcome;
+      }
+    }
+    return outcome;
+  }
+
+  /// Jacobians at the three stages y0 + Z_i (n forward differences each), and f there.
+  static void stage_jacobians(const Model& model, const State& y0, const Stages& z, Jacobian (&j)[kStages], Stages& f) {
     State fi;
     for (int i = 0; i < kStages; ++i) {
-      model.derivative(State(y0 + z.template segment<kN>(i * kN)), fi);
-      f.template segment<kN>(i * kN) = fi;
+      const State yi = y0 + z.col(i);
+      model.derivative(yi, fi);
+      f.col(i) = fi;
+      forward_difference_jacobian(model, yi, fi, j[i]);
     }
   }
 
-  static void build_matrix(double dt, const Jacobian (&j)[kStages], NewtonMatrix& m) {
-    m.setIdentity();
-    for (int i = 0; i < kStages; ++i)
-      for (int k = 0; k < kStages; ++k) m.template block<kN, kN>(i * kN, k * kN) -= dt * kA[i][k] * j[k];
+  /// Lagrange interpolation through J at c = 0, c1, c2, 1.
+  static void interpolate_jacobian(const Jacobian (&j)[kStages + 1], double c, Jacobian& out) {
+    const double nodes[kStages + 1] = {0.0, kC[0], kC[1], kC[2]};
+    out.setZero();
+    for (int k = 0; k <= kStages; ++k) {
+      double weight = 1.0;
+      for (int m = 0; m <= kStages; ++m)
+        if (m != k) weight *= (c - nodes[m]) / (nodes[k] - nodes[m]);
+      out += weight * j[k];
+    }
   }
 
-  int iterations_ = 0;
+  static void decompose_per_stage(const Jacobian (&j)[kStages], double h, PerStageFactorization& lu) {
+    auto& b = lu.beta;
+    for (int r = 0; r < kStages; ++r)
+      for (int c = 0; c < kStages; ++c) b[r][c] = kAInverse[r][c] / h;
+    const Jacobian identity = Jacobian::Identity();
+    lu.first_inverse = RealLU(identity * b[0][0] - j[0]).inverse();
+    const Jacobian& p = lu.first_inverse;
+    lu.s23 = identity * b[1][2] - (b[1][0] * b[0][2]) * p;
+    lu.s32 = identity * b[2][1] - (b[2][0] * b[0][1]) * p;
+    lu.second_inverse = RealLU(identity * b[1][1] - j[1] - (b[1][0] * b[0][1]) * p).inverse();
+    const Jacobian s33 = identity * b[2][2] - j[2] - (b[2][0] * b[0][2]) * p;
+    const Jacobian q_s23 = lu.second_inverse.lazyProduct(lu.s23);
+    lu.last.compute(s33 - lu.s32.lazyProduct(q_s23));
+  }
 
-  // Radau IIA, s = 3 (Hairer & Wanner, Table IV.5.6), with sqrt(6) written out.
+  /// Solves ((A^-1/h x I) - diag(J_i)) dZ = r by the block elimination of decompose_per_stage().
+  static Stages solve_per_stage(const PerStageFactorization& lu, const Stages& r) {
+    const auto& b = lu.beta;
+    const State p_r1 = lu.first_inverse * r.col(0);
+    const State r2 = r.col(1) - b[1][0] * p_r1;
+    const State q_r2 = lu.second_inverse * r2;
+    const State r3 = r.col(2) - b[2][0] * p_r1 - lu.s32 * q_r2;
+    Stages x;
+    x.col(2) = lu.last.solve(r3);
+    x.col(1) = q_r2 - lu.second_inverse * (lu.s23 * x.col(2));
+    x.col(0) = lu.first_inverse * (r.col(0) - b[0][1] * x.col(1) - b[0][2] * x.col(2));
+    return x;
+  }
+
+  /// Newton on F(Z) - (A^-1/h x I) Z = 0 (the stage equations times A^-1/h) with a Jacobian per
+  /// stage: it follows the stiff subspace as it turns from stage to stage, where one J for all
+  /// stages does not. f holds F at the initial Z.
+  static NewtonOutcome solve_stages_per_stage(const Model& model, const State& y0, const PerStageFactorization& lu,
+                                              const State& scale, Stages& z, Stages& f, double& faccon) {
+    NewtonOutcome outcome;
+    faccon = std::pow(std::max(faccon, std::numeric_limits<double>::epsilon()), 0.8);
+    double previous_norm = 0.0, previous_rate = 0.0, theta = kJacobianReuseRate;
+    State fi;
+    for (int iteration = 1; iteration <= kMaxNewtonIterations; ++iteration) {
+      outcome.iterations = iteration;
+      if (iteration > 1) {
+        for (int i = 0; i < kStages; ++i) {
+          model.derivative(State(y0 + z.col(i)), fi);
+          f.col(i) = fi;
+        }
+      }
+      if (!f.allFinite()) return outcome;
+      Stages residual = f;
+      for (int i = 0; i < kStages; ++i)
+        for (int k = 0; k < kStages; ++k) residual.col(i) -= lu.beta[i][k] * z.col(k);
+      const Stages dz = solve_per_stage(lu, residual);
+      if (!dz.allFinite()) return outcome;
+      const double norm = rms(dz, scale);
+      z += dz;
+      const int verdict = newton_verdict(iteration, norm, previous_norm, previous_rate, theta, faccon);
+      if (verdict != 0) {
+        outcome.converged = verdict > 0;
+        outcome.contraction = theta;
+        return outcome;
+      }
+    }
+    return outcome;
+  }
+
+  template <class Derived>
+  static double rms(const Eigen::MatrixBase<Derived>& dz, const State& scale) {
+    double sum = 0.0;
+    for (int i = 0; i < kStages; ++i) sum += dz.col(i).cwiseQuotient(scale).squaredNorm();
+    return std::sqrt(sum / (kStages * kN));
+  }
+
+  /// radau5.f's ESTRAD: err = (gamma/h I - J)^-1 (f(y0) + (e_1 Z_1 + e_2 Z_2 + e_3 Z_3)/h),
+  /// the difference to the embedded order-3 solution filtered by (I - h/gamma J)^-1 so that
+  /// stiff components do not count (sec. IV.8, eq. 8.20). At the first step and after a
+  /// rejection the filter is applied once more, to f(y0 + err) (eq. 8.21), and the smaller of the
+  /// two is used: radau5.f takes the second only when the first fails, which is the same test.
+  /// The result is mapped to the user's tolerance as radau5.f does (rtol' = 0.1 rtol^(2/3)):
+  /// |error| / tol = (|err| / rtol')^(3/2) with RMS norms over 1 + max(|y0|, |y1|), the
+  /// driver's own scale, so the map needs no tolerance.
+  void estimate_error(const Model& model, const State& y0, const State& f0, const State& y1, double dt,
+                      const Stages& z, bool improve, State& error) const {
+    const State combination = (z * kErrorWeights) / dt;
+    State err = lu_.real.solve(f0 + combination);
+    const State scale = (1.0 + y0.cwiseAbs().cwiseMax(y1.cwiseAbs()).array()).matrix();
+    const double n = static_cast<double>(kN);
+    double norm = std::sqrt(err.cwiseQuotient(scale).squaredNorm() / n);
+    if (improve) {
+      State f_err;
+      model.derivative(State(y0 + err), f_err);
+      const State second = lu_.real.solve(f_err + combination);
+      const double second_norm = std::sqrt(second.cwiseQuotient(scale).squaredNorm() / n);
+      if (second_norm < norm || !std::isfinite(norm)) {
+        err = second;
+        norm = second_norm;
+      }
+    }
+    // |err| -> |err|^(3/2) / 0.1^(3/2): the vector err scaled by (|err| / 0.1)^(1/2) / 0.1.
+    error = err * (std::sqrt(norm / 0.1) / 0.1);
+  }
+
+  // Radau IIA, s = 3: nodes, error weights and the eigen-decomposition A^-1 = T diag(gamma,
+  // alpha -+ i beta) T^-1 (radau5.f, also SciPy's radau.py). gamma = 3 + 3^(2/3) - 3^(1/3),
+  // alpha = 3 + (3^(1/3) - 3^(2/3))/2, beta = (3^(5/6) + 3^(7/6))/2.
   static constexpr double kSqrt6 = 2.449489742783178098197284;
   static constexpr double kA[kStages][kStages] = {
       {(88.0 - 7.0 * kSqrt6) / 360.0, (296.0 - 169.0 * kSqrt6) / 1800.0, (-2.0 + 3.0 * kSqrt6) / 225.0},
       {(296.0 + 169.0 * kSqrt6) / 1800.0, (88.0 + 7.0 * kSqrt6) / 360.0, (-2.0 - 3.0 * kSqrt6) / 225.0},
       {(16.0 - kSqrt6) / 36.0, (16.0 + kSqrt6) / 36.0, 1.0 / 9.0},
   };
+  // A^-1 (computed from kA, rounded to double).
+  static constexpr double kAInverse[kStages][kStages] = {
+      {3.224744871391589, 1.167840084690405, -0.2531972647421809},
+      {-3.567840084690405, 0.7752551286084112, 1.053197264742181},
+      {5.531972647421809, -7.531972647421810, 5.0},
+  };
+  static constexpr double kC[kStages] = {(4.0 - kSqrt6) / 10.0, (4.0 + kSqrt6) / 10.0, 1.0};
+  static constexpr double kGamma = 3.637834252744495732208418513577775;
+  static constexpr double kAlpha = 2.681082873627752133895790743211112;
+  static constexpr double kBeta = 3.050430199247410569426377624787569;
+  static inline const Eigen::Matrix3d kT = (Eigen::Matrix3d() << 0.09443876248897524, -0.14125529502095421,
+                                            0.03002919410514742, 0.25021312296533332, 0.20412935229379994,
+                                            -0.38294211275726192, 1.0, 1.0, 0.0)
+                                               .finished();
+  static inline const Eigen::Matrix3d kTInverse = (Eigen::Matrix3d() << 4.17871859155190428, 0.32768282076106237,
+                                                   0.52337644549944951, -4.17871859155190428, -0.32768282076106237,
+                                                   0.47662355450055044, 0.50287263494578682, -2.57192694985560522,
+                                                   0.59603920482822492)
+                                                      .finished();
+  // e_i of the estimate: (-13 - 7 sqrt 6)/3, (-13 + 7 sqrt 6)/3, -1/3.
+  static inline const Eigen::Vector3d kErrorWeights =
+      Eigen::Vector3d((-13.0 - 7.0 * kSqrt6) / 3.0, (-13.0 + 7.0 * kSqrt6) / 3.0, -1.0 / 3.0);
+  // The cubic through (0, 0), (c_i, Z_i): coefficients of x, x^2, x^3 = Z P (SciPy's P).
+  static inline const Eigen::Matrix3d kDensePolynomial =
+      (Eigen::Matrix3d() << 13.0 / 3.0 + 7.0 * kSqrt6 / 3.0, -23.0 / 3.0 - 22.0 * kSqrt6 / 3.0, 10.0 / 3.0 + 5.0 * kSqrt6,
+       13.0 / 3.0 - 7.0 * kSqrt6 / 3.0, -23.0 / 3.0 + 22.0 * kSqrt6 / 3.0, 10.0 / 3.0 - 5.0 * kSqrt6, 1.0 / 3.0,
+       -8.0 / 3.0, 10.0 / 3.0)
+          .finished();
+
+  Jacobian jacobian_ = Jacobian::Zero();     // J(y0) of the simplified Newton and the error estimate
+  Jacobian stage_jacobians_[kStages];          // of the per-stage Newton
+  Jacobian jacobian_at_start_ = Jacobian::Zero();  // J near y0 of the last per-stage step
+  Factorization lu_;
+  PerStageFactorization per_stage_lu_;
+  Stages z_ = Stages::Zero(), previous_polynomial_ = Stages::Zero();
+  double previous_step_ = 0.0, real_step_ = 0.0, complex_step_ = 0.0;  // h of the LU decompositions
+  double contraction_ = kJacobianReuseRate, faccon_ = 1.0;
+  bool have_jacobian_ = false, jacobian_is_fresh_ = false, have_predictor_ = false, attempt_pending_ = false;
+  bool first_step_ = true, per_stage_newton_ = false, used_per_stage_ = false;
+  int per_stage_steps_left_ = 0, per_stage_run_ = kPerStageNewtonSteps;
+  bool returned_to_simplified_ = false;
+  RadauStatistics statistics_;
 };
 
 }  // namespace spinning_top

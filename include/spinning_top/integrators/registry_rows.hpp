@@ -56,8 +56,9 @@ struct Integrator<IntegratorType::kAuto> {
   static constexpr StepLimit kStepLimit = StepLimit::kNone;
   static constexpr const char* kHelp =
       "exact for fixed_tip and frictionless, dop853 (tolerance 1e-12) for a state exact refuses; viscous: radau5 "
-      "when the friction time m/(k (1 + m h^2/A)) is shorter than step, dop853 otherwise; chooses again at reset "
-      "and live updates, and says what it runs and why";
+      "(tolerance/100) when friction relaxes the slip 450x faster than the fastest motion, k (1/m + h^2/A) > 450 "
+      "max(C |omega_Z|/A', sqrt(m g h/A'), |omega|/2), dop853 otherwise; chooses again at reset and live updates, and "
+      "says what it runs and why";
   static constexpr const char* kSceneNote = "";
   template <class Model>
   using Driver = AutoDriver<Model>;
@@ -141,11 +142,12 @@ template <>
 struct Integrator<IntegratorType::kRadau5> {
   static constexpr const char* kName = "radau5";
   static constexpr unsigned kScenes = kAllScenes;
-  static constexpr StepLimit kStepLimit = StepLimit::kOscillations;  // L-stable: friction does not limit it
-  static constexpr const char* kHelp = "Radau IIA order 5, L-stable: stiff friction";
+  static constexpr StepLimit kStepLimit = StepLimit::kNone;  // adaptive; L-stable: friction does not limit it
+  static constexpr const char* kHelp =
+      "Radau IIA order 5 with Hairer's RADAU5 error estimate and step control, L-stable: stiff friction";
   static constexpr const char* kSceneNote = "";
   template <class Model>
-  using Driver = FixedStepDriver<Model, RadauIIA5<Model>>;
+  using Driver = AdaptiveDriver<Model, RadauIIA5<Model>>;
 };
 
 template <>
