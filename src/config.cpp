@@ -44,7 +44,7 @@ const std::vector<ParameterSpec>& parameter_specs() {
        "auto shortens it to half that instead"},
       {"tolerance", "", "1e-12", false,
        "local error tolerance (relative and absolute) of adaptive integrators (auto in the viscous scene: dop853 "
-       "at it, radau5 at a hundredth of it)"},
+       "at a tenth of it, radau5 at a hundredth of it)"},
   };
   return specs;
 }

@@ -139,7 +139,8 @@ double stiff_run_deviation_from_fixed_tip(double friction, double duration) {
   config.initial.tilt = 0.3;
   config.initial.spin = 150.0;  // v_P(0) = 0: no initial slip, the k -> inf limit is the pivot
   auto viscous = make_simulator(config);
-  EXPECT_EQ(viscous->integrator_description(), "auto: radau5, tolerance 1e-14");
+  EXPECT_EQ(viscous->integrator_description().rfind("auto: radau5, tolerance 1e-14 (stiff: ", 0), 0u)
+      << viscous->integrator_description();
   SceneConfig pivot = config;
   pivot.scene = SceneType::kFixedTip;
   pivot.top.friction = 0.0;
@@ -268,7 +269,7 @@ TEST(Registry, EveryRowParsesBuildsWhereItServesAndIsRefusedElsewhere) {
           EXPECT_EQ(description, std::string(row.name) + ", step 0.001 s");
           break;
         case IntegratorKind::kAdaptive:
-          EXPECT_EQ(description, std::string(row.name) + ", tolerance 1e-10");
+          EXPECT_EQ(description, std::string(row.name) + ", tolerance 1e-12");  // the default tolerance
           EXPECT_TRUE(std::isinf(largest_fixed_step(config, row.type)));
           break;
         case IntegratorKind::kClosedForm:
@@ -323,28 +324,32 @@ TEST(AutoRule, ViscousRadauWhereFrictionIsStiffAgainstTheMotionElseDop853) {
   config.initial = nutating_top();
   // lambda = k (1/m + h^2/A) = 20 k 1/(kg s); the fastest motion here is the sliding top's
   // nutation, C omega_Z / A = 6e-5 * 150 / 4e-5 = 225 rad/s. auto's threshold is lambda =
-  // 450 * 225 = 1.0125e5 1/s, i.e. k = 5062.5 N s/m.
+  // 100 * 225 = 22500 1/s, i.e. k = 1125 N s/m.
   const MotionRates rates = motion_rates(config);
   EXPECT_DOUBLE_EQ(rates.fastest_oscillation(), 225.0);
   config.top.friction = 0.01;
   auto simulator = make_simulator(config);
   EXPECT_EQ(simulator->integrator_description(),
-            "auto: dop853, tolerance 1e-12 (not stiff: friction rate k (1/m + h^2/A) 0.2 1/s <= 450 x fastest "
+            "auto: dop853, tolerance 1e-13 (not stiff: friction rate k (1/m + h^2/A) 0.2 1/s <= 100 x fastest "
             "motion 225 rad/s)");
   EXPECT_EQ(simulator->integrator_choice().method, IntegratorType::kDop853);
-  config.top.friction = 5000.0;
+  config.top.friction = 1120.0;
   EXPECT_EQ(auto_plan(config).first.type, IntegratorType::kDop853);
-  config.top.friction = 5100.0;
+  config.top.friction = 1130.0;
   EXPECT_EQ(auto_plan(config).first.type, IntegratorType::kRadau5);
   EXPECT_EQ(make_simulator(config)->integrator_description(),
-            "auto: radau5, tolerance 1e-14 (stiff: friction rate k (1/m + h^2/A) 1.02e+05 1/s > 450 x fastest motion "
+            "auto: radau5, tolerance 1e-14 (stiff: friction rate k (1/m + h^2/A) 2.26e+04 1/s > 100 x fastest motion "
             "225 rad/s)");
-  // A tolerance asked for explicitly scales both: radau5 stays 100x tighter, floored at 1e-14.
+  // A tolerance asked for explicitly scales both: radau5 stays 100x tighter, dop853 10x, floored
+  // at 1e-14.
   config.top.friction = 1e7;
   config.integrator.tolerance = 1e-9;
   EXPECT_DOUBLE_EQ(auto_plan(config).first.tolerance, 1e-11);
   config.integrator.tolerance = 1e-14;
   EXPECT_EQ(auto_plan(config).first.tolerance, 1e-14);
+  config.top.friction = 0.01;
+  config.integrator.tolerance = 1e-9;
+  EXPECT_DOUBLE_EQ(auto_plan(config).first.tolerance, 1e-10);
 }
 
 TEST(AutoRule, AChangeOfFrictionAtUpdateSwitchesBetweenStiffAndNonStiffAndSaysSo) {
@@ -356,7 +361,7 @@ TEST(AutoRule, AChangeOfFrictionAtUpdateSwitchesBetweenStiffAndNonStiffAndSaysSo
   ASSERT_EQ(simulator->advance_to(0.5), Event::kNone);
   const Snapshot before = simulator->snapshot();
   TopParameters stiff = config.top;
-  stiff.friction = 1e5;  // lambda = 2e6 1/s > 450 x 225 rad/s
+  stiff.friction = 1e5;  // lambda = 2e6 1/s > 100 x 225 rad/s
   EXPECT_TRUE(simulator->update(stiff, config.integrator));
   EXPECT_EQ(simulator->integrator_choice().method, IntegratorType::kRadau5);
   // The switch keeps time and state: the new driver starts from the old one's state (the
@@ -409,20 +414,27 @@ TEST(RefusedSteps, ExplicitRk4BeyondTheFrictionStabilityLimitIsRefused) {
   EXPECT_NO_THROW(make_simulator(config));
 }
 
-TEST(RefusedSteps, AutoShortensTheSubstepInsteadAndStaysFinite) {
+TEST(RefusedSteps, AutoIsNeverRefusedAStepItsViscousMethodsAreAdaptive) {
   SceneConfig config;
   config.scene = SceneType::kViscous;
   config.initial = nutating_top();
-  config.top.friction = 1e3;      // stiff: auto runs radau5 at a fixed step
-  config.integrator.step = 0.05;  // beyond its limit 2/225 rad/s: auto runs at half the limit instead
+  config.top.friction = 1e4;      // lambda = 2e5 1/s > 100 x 225 rad/s: stiff, auto runs radau5
+  config.integrator.step = 0.05;  // beyond every fixed-step method's limit 2/225 rad/s
   auto simulator = make_simulator(config);
-  EXPECT_EQ(simulator->integrator_description(),
-            "auto: radau5, step 0.00444444 s (stiff: friction time 5e-05 s < substep 0.00444 s)");
-  // It is radau5 at that substep, which a named radau5 takes too, but is refused at 0.05 s.
+  EXPECT_EQ(simulator->integrator_description().rfind("auto: radau5, tolerance 1e-14 (stiff: ", 0), 0u)
+      << simulator->integrator_description();
+  // A fixed-step method named at that step is refused, naming the key.
   SceneConfig named = config;
+  named.integrator.type = IntegratorType::kRk4;
+  try {
+    make_simulator(named);
+    FAIL() << "rk4 at 0.05 s was accepted";
+  } catch (const InvalidParameter& e) {
+    EXPECT_EQ(e.parameter(), "step");
+  }
+  // auto runs radau5 as a user naming it at auto's tolerance would: the same steps, bit for bit.
   named.integrator.type = IntegratorType::kRadau5;
-  EXPECT_THROW(make_simulator(named), InvalidParameter);
-  named.integrator.step = 0.5 * largest_fixed_step(config, IntegratorType::kRadau5);
+  named.integrator.tolerance = 1e-14;
   auto radau5 = make_simulator(named);
   for (int i = 1; i <= 100; ++i) {
     ASSERT_EQ(simulator->advance_to(0.01 * i), Event::kNone);

@@ -85,9 +85,9 @@ constexpr double kAutoFallbackTolerance = 1e-12;
 ///   fixed_tip, frictionless -> exact (the closed form: round-off accuracy, no step), falling back
 ///     to dop853 at min(tolerance, kAutoFallbackTolerance) for a state exact refuses;
 ///   viscous -> radau5 at tolerance/100 (min 1e-14) when friction is stiff against the motion
-///     (lambda = k (1/m + h^2/A) > 450 times the fastest motion's rate: dop853's step would then
+///     (lambda = k (1/m + h^2/A) > 100 times the fastest motion's rate: dop853's step would then
 ///     be bounded by its stability, not its accuracy; the measured cost crossover), else dop853
-///     at `tolerance` (doc/integrators.md, "Viscous: the default").
+///     at tolerance/10 (min 1e-14) (doc/integrators.md, "Viscous: the default").
 /// Fixed-step choices run at min(step, largest_fixed_step / 2): auto is never refused a step.
 AutoPlan auto_plan(const SceneConfig& config);
 

@@ -56,8 +56,8 @@ struct Integrator<IntegratorType::kAuto> {
   static constexpr StepLimit kStepLimit = StepLimit::kNone;
   static constexpr const char* kHelp =
       "exact for fixed_tip and frictionless, dop853 (tolerance 1e-12) for a state exact refuses; viscous: radau5 "
-      "(tolerance/100) when friction relaxes the slip 450x faster than the fastest motion, k (1/m + h^2/A) > 450 "
-      "max(C |omega_Z|/A', sqrt(m g h/A'), |omega|/2), dop853 otherwise; chooses again at reset and live updates, and "
+      "(tolerance/100) when friction relaxes the slip 100x faster than the fastest motion, k (1/m + h^2/A) > 100 "
+      "max(C |omega_Z|/A', sqrt(m g h/A'), |omega|/2), dop853 (tolerance/10) otherwise; chooses again at reset and live updates, and "
       "says what it runs and why";
   static constexpr const char* kSceneNote = "";
   template <class Model>
