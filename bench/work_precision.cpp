@@ -417,10 +417,15 @@ void run_scene(const Scene& scene, Reference& ref, const Options& opt, std::vect
       const std::unique_ptr<Simulator> sim = simulator_or_null(c);
       if (!sim) continue;  // this method is not offered for this scene, or not at this step
       progress(scene.name + ": " + to_string(type) + (closed_form ? "" : (adaptive ? " tol " : " step ") + number(p)));
+      // From make_simulator, as simulate runs: reset() would let exact reuse its series and time
+      // one evaluation. The simulators are freed outside the timed runs.
+      std::vector<std::unique_ptr<Simulator>> built;
       const double cpu = median_cpu([&] {
-        sim->reset();
-        sim->advance_to(duration);
+        built.push_back(make_simulator(c));
+        built.back()->advance_to(duration);
       });
+      built.clear();
+      sim->advance_to(duration);
       if (sim->event() != Event::kNone) continue;
       const long steps = sim->steps();
       // Error run: samples every max(step, 1 ms), a multiple of the step (powers of two of
