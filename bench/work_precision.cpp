@@ -672,8 +672,8 @@ PeerChoice choose_peer_points(const std::vector<PeerPoint>& sweep, double target
     return c;
   }
   // Runs within 10 % of the smallest error are equally accurate (clipped at the samples, RKF78's
-  // error is the same from 1e-4 to 1e-14 on the integrable scenes: one step per sample): the
-  // loosest of them, no costlier than the others.
+  // error on the integrable toy tops is the same from 1e-4 to 1e-14: one step per sample, more at
+  // 1e-13 on the frictionless top): the loosest of them, no costlier than the others.
   double best = sweep[0].err.attitude;
   for (const PeerPoint& p : sweep) best = std::min(best, p.err.attitude);
   std::size_t last = 0;
