@@ -3,8 +3,10 @@
 # work-precision benchmark (ours vs Boost.Odeint, the default at the node's 1 ms sampling against
 # RKF78, long-run energy), the default's re-initialisation cost and the extreme-cases table,
 # then writes CSVs, PNG plots and bench/results/summary.md, and splices the tables into README.md
-# and doc/benchmark.md. Under 10 minutes on 2 cores.
-# Usage: scripts/bench.sh [--quick]   (--quick: fewer points and states, 1e5-step long runs; ~4 min)
+# and doc/benchmark.md. 4 min 24 s on 2 cores before the default's 1 ms series and reinit_cost
+# were added (not timed since).
+# Usage: scripts/bench.sh [--quick]   (--quick: fewer points and states, 1e5-step long runs; 6 min
+# 49 s measured with other builds on the 2 cores, 4 min 58 s of CPU, two benchmarks compiled)
 # Set SPINNING_TOP_BUILD to build elsewhere than build/.
 set -euo pipefail
 source "$(dirname "$0")/env.sh"
