@@ -76,7 +76,7 @@ def dense_plot(directory, rows):
             if r["scene"] == scene:
                 series.setdefault((r["family"], r["method"]), []).append(r)
         for (family, method), points in series.items():
-            errors = [max(float(p["max_attitude_error_rad"]), 1e-16) for p in points]
+            errors = [max(float(p["max_attitude_error_rad"] or p["max_axis_error_rad"]), 1e-16) for p in points]
             if family == "default":
                 p = points[0]
                 if p.get("cpu_fresh_seconds"):
@@ -215,6 +215,9 @@ def main():
     dense_lines = []
     dense_path = os.path.join(directory, "dense_sampling.csv")
     dense_rows = read_rows(dense_path) if os.path.exists(dense_path) else []
+    for r in dense_rows:
+        if "max_axis_error_rad" not in r:  # an older file: its attitude error was the axis angle
+            r["max_axis_error_rad"], r["max_attitude_error_rad"] = r["max_attitude_error_rad"], ""
     if dense_rows:
         def cell(r, key, scale=1.0, fmt=".3g"):
             value = r.get(key) or ""  # columns an older dense_sampling.csv lacks are left blank
