@@ -2,10 +2,11 @@
 """Plots and summary of the work-precision benchmark (doc/benchmark.md).
 
 Reads DIR/work_precision.csv, DIR/long_run_energy.csv, DIR/reference_check.csv and (if present)
-DIR/dense_sampling.csv written by the work_precision executable; a method with a single point
-(exact: no step, no tolerance) is drawn as one marker and its CPU time at a larger target error is
-that point's ('≤'); writes DIR/work_precision_<scene>.png, DIR/long_run_energy.png
-and DIR/summary.md, and prints the ratio table. Usage: plot_results.py [DIR]
+DIR/dense_sampling.csv and DIR/default_ratio.md written by the work_precision executable, and
+DIR/reinit_cost.md written by reinit_cost; a method with a single point (exact: no step, no
+tolerance) is drawn as one marker and its CPU time at a larger target error is that point's ('≤');
+writes DIR/work_precision_<scene>.png, DIR/long_run_energy.png, DIR/dense_sampling.png and
+DIR/summary.md, and prints the ratio table. Usage: plot_results.py [DIR]
 """
 import csv
 import math
@@ -62,6 +63,43 @@ def fmt_ms(value):
     if cpu is None:
         return "not reached in the sweep"
     return ("" if exact else "≤ ") + f"{cpu * 1e3:.3g}"
+
+
+def dense_plot(directory, rows):
+    """Whole-attitude error against CPU time at a state every 1 ms, one panel per scene: the default
+    (fresh and after reset()), our other methods, and odeint's (a peer's tolerance sweep as a line)."""
+    scenes = list(OrderedDict.fromkeys(r["scene"] for r in rows))
+    fig, axes = plt.subplots(1, len(scenes), figsize=(5 * len(scenes), 4.5), squeeze=False)
+    for ax, scene in zip(axes[0], scenes):
+        series = OrderedDict()
+        for r in rows:
+            if r["scene"] == scene:
+                series.setdefault((r["family"], r["method"]), []).append(r)
+        for (family, method), points in series.items():
+            errors = [max(float(p["max_attitude_error_rad"] or p["max_axis_error_rad"]), 1e-16) for p in points]
+            if family == "default":
+                p = points[0]
+                if p.get("cpu_fresh_seconds"):
+                    ax.loglog([float(p["cpu_fresh_seconds"]) * 1e3], errors, "r*", markersize=14,
+                              label=f"{method}, fresh")
+                ax.loglog([float(p["cpu_seconds"]) * 1e3], errors, "r*", markersize=10, markerfacecolor="none",
+                          label=f"{method}, after reset()")
+                continue
+            cpu = [float(p["cpu_seconds"]) * 1e3 for p in points]
+            style = dict(linestyle="-" if len(points) > 1 else "none", marker="o" if family == "ours" else "s",
+                         markersize=4)
+            if family == "odeint":
+                style["linestyle"] = "--" if len(points) > 1 else "none"
+            ax.loglog(cpu, errors, label=(method if family == "ours" else "odeint " + method), **style)
+        ax.set_title(scene)
+        ax.set_xlabel("CPU ms for 10000 requests (10 s at 1 kHz)")
+        ax.set_ylabel("max whole-attitude error [rad]")
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend(fontsize=6)
+    fig.suptitle("The default at the node's sampling (a state every 1 ms) against the peers")
+    fig.tight_layout()
+    fig.savefig(os.path.join(directory, "dense_sampling.png"), dpi=90)
+    plt.close(fig)
 
 
 def main():
@@ -176,15 +214,34 @@ def main():
 
     dense_lines = []
     dense_path = os.path.join(directory, "dense_sampling.csv")
-    if os.path.exists(dense_path):
-        dense_lines = ["CPU time to answer a request every 1 ms over 10 s (10000 states, what the node asks for; "
-                       "output off), and the max attitude error on that grid:", "",
-                       "| scene | family | method | setting | CPU ms | max attitude error [rad] |",
-                       "|---|---|---|---|---|---|"]
-        for r in read_rows(dense_path):
+    dense_rows = read_rows(dense_path) if os.path.exists(dense_path) else []
+    for r in dense_rows:
+        if "max_axis_error_rad" not in r:  # an older file: its attitude error was the axis angle
+            r["max_axis_error_rad"], r["max_attitude_error_rad"] = r["max_attitude_error_rad"], ""
+    if dense_rows:
+        def cell(r, key, scale=1.0, fmt=".3g"):
+            value = r.get(key) or ""  # columns an older dense_sampling.csv lacks are left blank
+            return format(float(value) * scale, fmt) if value else ""
+        dense_lines = ["Every series at a state every 1 ms over 10 s (10000 requests, output off): CPU ms after "
+                       "`reset()` (odeint: its stepper built in the timed run), from a fresh simulator for the "
+                       "default, steps, and the max errors on that grid: the whole attitude (rotation angle), the "
+                       "axis, |R - R_ref| / (m g).", "",
+                       "| scene | family | method | setting | CPU ms | fresh CPU ms | steps | attitude [rad] | "
+                       "axis [rad] | R [m g] |",
+                       "|---|---|---|---|---|---|---|---|---|---|"]
+        for r in dense_rows:
             dense_lines.append(f"| {r['scene']} | {r['family']} | {r['method']} | {r['setting']} | "
-                               f"{float(r['cpu_seconds']) * 1e3:.3g} | {float(r['max_attitude_error_rad']):.2g} |")
-        print("\n".join(dense_lines))
+                               f"{cell(r, 'cpu_seconds', 1e3)} | {cell(r, 'cpu_fresh_seconds', 1e3)} | "
+                               f"{r.get('steps', '')} | {cell(r, 'max_attitude_error_rad', fmt='.2g')} | "
+                               f"{cell(r, 'max_axis_error_rad', fmt='.2g')} | "
+                               f"{cell(r, 'max_normal_force_error_rel_mg', fmt='.2g')} |")
+        dense_plot(directory, dense_rows)
+
+    def text_of(name):
+        path = os.path.join(directory, name)
+        return open(path).read().strip() if os.path.exists(path) else ""
+
+    default_ratio, reinit_cost = text_of("default_ratio.md"), text_of("reinit_cost.md")
 
     check_lines = ["| scene | quantity | value |", "|---|---|---|"]
     for c in checks:
@@ -201,8 +258,6 @@ def main():
         f.write(ratio_table + "\n\n")
         if ambition:
             f.write("\n".join(ambition) + "\n\n")
-        if dense_lines:
-            f.write("\n".join(dense_lines) + "\n\n")
         f.write("![fixed tip](work_precision_fixed_tip.png)\n\n")
         for scene in data:
             if scene != "fixed_tip":
@@ -211,6 +266,16 @@ def main():
             f.write("![long runs](long_run_energy.png)\n\n")
         f.write("<details><summary>Per-method CPU time at the targets</summary>\n\n" + "\n".join(method_lines) +
                 "\n\n</details>\n\n")
+        if default_ratio or dense_lines:
+            f.write("### The default at the node's 1 ms sampling\n\n")
+            if default_ratio:
+                f.write(default_ratio + "\n\n")
+            if dense_lines:
+                f.write("![dense sampling](dense_sampling.png)\n\n")
+                f.write("<details><summary>Every series at 1 ms</summary>\n\n" + "\n".join(dense_lines) +
+                        "\n\n</details>\n\n")
+        if reinit_cost:
+            f.write("### Re-initialisation of the default\n\n" + reinit_cost + "\n\n")
         f.write("### References and their checks\n\n" + "\n".join(check_lines) + "\n")
 
 

@@ -1,7 +1,8 @@
-"""Splices the tables the benchmark just measured into README.md, between its
-'<!-- BEGIN GENERATED name ... -->' and '<!-- END GENERATED name -->' markers, so that the README
-shows what scripts/bench.sh produced and nothing typed by hand.
-Usage: update_readme.py RESULTS_DIR README.md"""
+"""Splices the tables the benchmark just measured into README.md (and other Markdown files, e.g.
+doc/benchmark.md), between their '<!-- BEGIN GENERATED name ... -->' and
+'<!-- END GENERATED name -->' markers, so that they show what scripts/bench.sh produced and
+nothing typed by hand. README.md must hold every block; the other files, the blocks they have.
+Usage: update_readme.py RESULTS_DIR README.md [OTHER.md ...]"""
 import pathlib
 import re
 import sys
@@ -15,20 +16,31 @@ def ratio_table(summary: str) -> str:
     return "\n".join(lines[start:end]).strip()
 
 
-def splice(readme: str, name: str, body: str) -> str:
+def has_block(text: str, name: str) -> bool:
+    return re.search(r"<!-- BEGIN GENERATED %s[^>]*-->\n" % name, text) is not None
+
+
+def splice(text: str, name: str, body: str, path: pathlib.Path) -> str:
     pattern = re.compile(r"(<!-- BEGIN GENERATED %s[^>]*-->\n).*?(<!-- END GENERATED %s -->)" % (name, name),
                          re.S)
-    if not pattern.search(readme):
-        sys.exit(f"update_readme.py: README has no GENERATED {name} markers")
-    return pattern.sub(lambda m: m.group(1) + body + "\n" + m.group(2), readme)
+    if not pattern.search(text):
+        sys.exit(f"update_readme.py: {path} has no GENERATED {name} markers")
+    return pattern.sub(lambda m: m.group(1) + body + "\n" + m.group(2), text)
 
 
 results = pathlib.Path(sys.argv[1])
-readme_path = pathlib.Path(sys.argv[2])
-readme = readme_path.read_text()
-readme = splice(readme, "work_precision", ratio_table((results / "summary.md").read_text()))
-extreme = results / "extreme_cases.md"
-if extreme.exists():
-    readme = splice(readme, "extreme_cases", extreme.read_text().strip())
-readme_path.write_text(readme)
-print(f"update_readme.py: tables of {results} spliced into {readme_path}")
+targets = [pathlib.Path(arg) for arg in sys.argv[2:]]
+blocks = {"work_precision": ratio_table((results / "summary.md").read_text())}
+for name in ("default_ratio", "default_ratio_summary", "reinit_cost", "extreme_cases"):
+    path = results / f"{name}.md"
+    if path.exists():
+        blocks[name] = path.read_text().strip()
+    else:
+        print(f"update_readme.py: no {path}; its GENERATED {name} block is left as it is")
+for i, path in enumerate(targets):
+    text = path.read_text()
+    for name, body in blocks.items():
+        if i == 0 or has_block(text, name):  # the README must have every block
+            text = splice(text, name, body, path)
+    path.write_text(text)
+    print(f"update_readme.py: tables of {results} spliced into {path}")
