@@ -131,11 +131,15 @@ void print_help(std::ostream& out) {
          "few degenerate ones, e.g. an axis vertical while it moves, or g = 0 on the frictionless floor) it\n"
          "runs dop853 at tolerance "
       << kAutoFallbackTolerance
-      << " instead. The output's first line says which method ran and why.\n"
+      << " instead. For viscous it runs radau5 at tolerance/100 where friction is stiff (k (1/m +\n"
+         "h^2/A) > 100 x the fastest motion), dop853 at tolerance/10 otherwise. The output's first line\n"
+         "says which method ran and why.\n"
          "\n"
          "Output: a comment naming the integrator that ran, e.g.\n"
          "  # integrator: auto: exact: closed form, nutation period 0.058 s, 9 Fourier terms\n"
          "  # integrator: auto: dop853, tolerance 1e-12 (exact refused: <its reason>)\n"
+         "  # integrator: auto: radau5, tolerance 1e-14 (stiff: friction rate k (1/m + h^2/A) 2e+06 1/s > 100 x\n"
+         "    fastest motion 225 rad/s)\n"
          "then the CSV header\n"
          "  "
       << kCsvHeader
