@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # The benchmark command (doc/benchmark.md): builds the benchmark executables in Release, runs the
 # work-precision benchmark (ours vs Boost.Odeint, the default at the node's 1 ms sampling against
-# RKF78, long-run energy), the default's re-initialisation cost and the extreme-cases table,
+# RKF78, long-run energy), the default's re-initialisation cost, the viscous default from k = 0 to
+# m/k = 1e-8 s (bench/viscous_default) and the extreme-cases table,
 # then writes CSVs, PNG plots and bench/results/summary.md, and splices the tables into README.md
 # and doc/benchmark.md. 4 min 24 s on 2 cores before the default's 1 ms series and reinit_cost
 # were added (not timed since).
@@ -25,7 +26,7 @@ if [ "$(id -u)" -eq 0 ]; then "$SPINNING_TOP_ROOT/scripts/setup.sh" --bench; fi
 echo "bench.sh: building the benchmarks in $SPINNING_TOP_BUILD (Release)"
 cmake -S "$SPINNING_TOP_ROOT" -B "$SPINNING_TOP_BUILD" \
   -DPYTHON_EXECUTABLE=/usr/bin/python3 -DCMAKE_BUILD_TYPE="${CMAKE_BUILD_TYPE:-Release}" >/dev/null
-targets=(work_precision reinit_cost fallback_tolerance)
+targets=(work_precision reinit_cost fallback_tolerance viscous_default)
 grep -q "add_executable(extreme_cases" "$SPINNING_TOP_ROOT/bench/CMakeLists.txt" && targets+=(extreme_cases)
 cmake --build "$SPINNING_TOP_BUILD" --target "${targets[@]}" -- -j"$(nproc)"
 
@@ -38,6 +39,10 @@ echo "bench.sh: work-precision benchmark (progress below)"
 
 echo "bench.sh: the default's re-initialisation cost (progress below)"
 "$bin/reinit_cost" --output-dir "$results" "${quick[@]}" >/dev/null
+
+echo "bench.sh: the viscous default from k = 0 to m/k = 1e-8 s, and its peers (progress below)"
+# One run per CPU figure: the runs take 0.01-40 s each, long enough for one to be representative.
+"$bin/viscous_default" --output-dir "$results" --repeats 1 "${quick[@]}" > "$results/viscous_default.md"
 
 echo "bench.sh: auto's fallback tolerance (dop853 against exact)"
 "$bin/fallback_tolerance" --output-dir "$results"
