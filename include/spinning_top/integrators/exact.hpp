@@ -76,6 +76,7 @@
 #include <complex>
 #include <cstdio>
 #include <limits>
+#include <optional>
 #include <string>
 #include <type_traits>
 #include <vector>
@@ -934,16 +935,24 @@ class ExactDriver : public DriverBase<Model> {
   /// with the same model (reset() to the initial state) reuses what was built.
   void reset(const Model& model, double t, const State& y) {
     const bool same = built_ && t == start_t_ && y == start_y_ && same_model(model);
+    // Built (or refused) before anything changes, so that a refusal (InvalidParameter: a reset
+    // to a state exact cannot start from, after a live update) leaves the driver running where
+    // it was; and built even when the start itself is an event, so that a refusal depends on
+    // the parameters and the state, not on the sign of R there.
+    std::optional<Solution> next;
+    if (!same) {
+      State start = y;
+      normalize_attitude(start);  // what start() below keeps as y_out_
+      if (all_finite(start)) next.emplace(model, t, start);
+    }
     this->start(model, t, y);
     pending_ = Event::kNone;
     event_time_ = std::numeric_limits<double>::infinity();
     period_index_ = std::numeric_limits<long>::min();
     if (this->event_ == Event::kNonFinite) return;
     if (!same) {
-      // Built (or refused) even when the start itself is an event, so that a refusal depends on
-      // the parameters and the state, not on the sign of R there.
       built_ = false;
-      solution_ = Solution(model, t, this->y_out_);
+      solution_ = std::move(*next);
       parameters_ = model.parameters();
       spin_ = model.spin();
       start_t_ = t;
