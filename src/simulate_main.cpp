@@ -7,7 +7,8 @@
 // The CSV starts with one comment line, "# integrator: <what ran and why>".
 // Exit codes: 0 success (also when a validity event ends the run early), 1 runtime error
 // unrelated to the input (e.g. the output cannot be written), 2 bad input (options, YAML,
-// keys, values). On exit code 2 nothing is written; a file output appears only complete.
+// keys, values). On exit code 2 nothing is written; a file output appears only complete; a FIFO
+// or character device given as --output is written to, never replaced.
 #include <fcntl.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -19,6 +20,7 @@
 #include <cmath>
 #include <csignal>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <fstream>
 #include <iostream>
@@ -74,8 +76,11 @@ void print_help(std::ostream& out) {
          "  --set key=value      overrides one key of the scene file (repeatable; the last wins)\n"
          "  --duration SECONDS   simulated time to run, > 0 (default 10)\n"
          "  --output-rate HZ     output rows per simulated second, > 0 (default 100)\n"
-         "  --output FILE.csv    output file (default: stdout); written to a temporary file\n"
-         "                       and renamed, so it appears only when complete\n"
+         "  --output FILE.csv    output file (default and '-': stdout). A new or regular file is\n"
+         "                       written to a temporary file beside it and renamed, so it appears\n"
+         "                       only when complete; a FIFO or character device (also through a\n"
+         "                       symbolic link) is written to directly, never replaced; a\n"
+         "                       directory or any other kind of file is refused\n"
          "  --help               this text\n"
          "Options also take the form --option=value.\n"
          "\n"
@@ -352,6 +357,81 @@ extern "C" void remove_temporary_and_exit(int signal_number) {
   std::raise(signal_number);
 }
 
+/// Where --output writes, decided by what the path is now (a symbolic link by its target).
+struct OutputTarget {
+  enum class Kind { kStdout, kReplaceFile, kStream } kind = Kind::kStdout;
+  std::string path;  ///< the file to replace or to stream into (a link's target)
+};
+
+/// A new path or a regular file: replaced atomically (temporary file and rename). A FIFO or a
+/// character device (/dev/null, a terminal): streamed into, since renaming a regular file onto
+/// it would replace the device node itself (as root, --output /dev/null would have replaced the
+/// system's /dev/null). A directory or any other kind: refused (UsageError: exit 2).
+OutputTarget output_target(const std::string& path) {
+  OutputTarget target;
+  if (path.empty() || path == "-") return target;
+  struct stat st {};
+  if (lstat(path.c_str(), &st) != 0) {
+    if (errno != ENOENT) throw UsageError("--output: cannot inspect '" + path + "': " + std::strerror(errno));
+    target.kind = OutputTarget::Kind::kReplaceFile;  // a new file (a missing directory fails later, exit 1)
+    target.path = path;
+    return target;
+  }
+  target.path = path;
+  if (S_ISLNK(st.st_mode)) {
+    // Replace or stream into what the link points to; renaming onto the link would replace it.
+    char* resolved = realpath(path.c_str(), nullptr);
+    if (resolved == nullptr)
+      throw UsageError("--output: '" + path + "' is a symbolic link that does not resolve: " + std::strerror(errno));
+    target.path = resolved;
+    std::free(resolved);
+    if (stat(target.path.c_str(), &st) != 0)
+      throw UsageError("--output: cannot inspect '" + target.path + "': " + std::strerror(errno));
+  }
+  if (S_ISREG(st.st_mode)) {
+    target.kind = OutputTarget::Kind::kReplaceFile;
+  } else if (S_ISFIFO(st.st_mode) || S_ISCHR(st.st_mode)) {
+    target.kind = OutputTarget::Kind::kStream;
+  } else if (S_ISDIR(st.st_mode)) {
+    throw UsageError("--output: '" + path + "' is a directory; give a file name");
+  } else {
+    throw UsageError("--output: '" + path + "' is neither a regular file, a FIFO nor a character device");
+  }
+  return target;
+}
+
+/// Writes straight into a FIFO or a character device (no temporary file, no rename). Opened
+/// without O_CREAT, so a path that has meanwhile disappeared is not created as a regular file.
+class StreamOutput {
+ public:
+  explicit StreamOutput(const std::string& path) : path_(path) {
+    const int fd = open(path.c_str(), O_WRONLY | O_NOCTTY | O_CLOEXEC);
+    if (fd < 0) throw std::runtime_error("--output: cannot open '" + path + "': " + std::strerror(errno));
+    file_ = fdopen(fd, "w");
+    if (file_ == nullptr) {
+      close(fd);
+      throw std::runtime_error("cannot open '" + path + "': " + std::strerror(errno));
+    }
+  }
+  ~StreamOutput() {
+    if (file_ != nullptr) std::fclose(file_);
+  }
+  StreamOutput(const StreamOutput&) = delete;
+  StreamOutput& operator=(const StreamOutput&) = delete;
+  std::FILE* stream() { return file_; }
+  void commit() {
+    const bool write_failed = std::ferror(file_) != 0;
+    const int close_status = std::fclose(file_);
+    file_ = nullptr;
+    if (write_failed || close_status != 0)
+      throw std::runtime_error("cannot write '" + path_ + "': " + std::strerror(errno));
+  }
+
+ private:
+  std::string path_;
+  std::FILE* file_ = nullptr;
+};
+
 /// Writes through a temporary file in the destination's directory and renames it into
 /// place, so readers never see a partial file and a failed run leaves none.
 class AtomicOutputFile {
@@ -390,6 +470,11 @@ class AtomicOutputFile {
     file_ = nullptr;
     if (write_failed || close_status != 0)
       throw std::runtime_error("cannot write '" + temporary_ + "': " + std::strerror(errno));
+    // The destination may have changed kind since output_target() looked: rename only onto a
+    // regular file or a free name.
+    struct stat st {};
+    if (lstat(path_.c_str(), &st) == 0 && !S_ISREG(st.st_mode))
+      throw std::runtime_error("'" + path_ + "' is no longer a regular file; the output is left in '" + temporary_ + "'");
     if (std::rename(temporary_.c_str(), path_.c_str()) != 0)
       throw std::runtime_error("cannot rename '" + temporary_ + "' to '" + path_ + "': " + std::strerror(errno));
     committed_ = true;
@@ -411,6 +496,7 @@ class AtomicOutputFile {
 int main_with_exit_code(int argc, char** argv) {
   Options options;
   std::unique_ptr<Simulator> simulator;
+  OutputTarget output;
   try {
     options = parse_options(argc, argv);
     if (options.help) {
@@ -418,6 +504,7 @@ int main_with_exit_code(int argc, char** argv) {
       return 0;
     }
     simulator = make_simulator(read_scene(options));
+    output = output_target(options.output_path);
   } catch (const UsageError& e) {
     std::cerr << "simulate: error: " << e.what() << "\nTry 'simulate --help' for the options and keys.\n";
     return kExitBadInput;
@@ -428,15 +515,19 @@ int main_with_exit_code(int argc, char** argv) {
 
   const OutputTimes times(options.duration, options.output_rate);
   try {
-    if (options.output_path.empty()) {
+    if (output.kind == OutputTarget::Kind::kStdout) {
       run(*simulator, times, stdout);
       if (std::fflush(stdout) != 0 || std::ferror(stdout))
         throw std::runtime_error(std::string("cannot write to stdout: ") + std::strerror(errno));
+    } else if (output.kind == OutputTarget::Kind::kStream) {
+      StreamOutput stream(output.path);
+      run(*simulator, times, stream.stream());
+      stream.commit();
     } else {
       for (int signal_number : {SIGINT, SIGTERM, SIGHUP}) std::signal(signal_number, remove_temporary_and_exit);
-      AtomicOutputFile output(options.output_path);
-      run(*simulator, times, output.stream());
-      output.commit();
+      AtomicOutputFile file(output.path);
+      run(*simulator, times, file.stream());
+      file.commit();
     }
   } catch (const std::exception& e) {
     std::cerr << "simulate: error: " << e.what() << "\n";

@@ -1,6 +1,7 @@
 // The batch simulator's command-line contract (issue 2, "Batch simulator"; doc/simulate.md),
 // tested on the built executable: CSV layout and output instants, the physics of the rows it
 // writes, and exit code 2 with nothing written for every kind of bad input.
+#include <fcntl.h>
 #include <gtest/gtest.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
@@ -213,6 +214,71 @@ TEST_F(SimulateTest, FileOutputEqualsStdoutAndLeavesNoTemporaryFile) {
   ASSERT_EQ(to_stdout.exit_code, 0) << to_stdout.err;
   EXPECT_EQ(read_file(csv), to_stdout.out);
   EXPECT_EQ(directory_entries(output_dir_), std::vector<std::string>{"run.csv"});
+}
+
+// --output never replaces what is not a regular file: renaming the temporary file onto a FIFO
+// or a device node would replace the node itself (as root, `--output /dev/null` replaced the
+// system's /dev/null). A FIFO and a device are written into; a directory is refused.
+TEST_F(SimulateTest, AFifoAsOutputIsWrittenIntoAndStaysAFifo) {
+  const std::string fifo = output_dir_ + "/rows";
+  ASSERT_EQ(mkfifo(fifo.c_str(), 0600), 0);
+  // The read end, opened first without blocking: the 0.5 s run (~14 kB) fits the pipe's buffer,
+  // so simulate finishes before we read, and a run that replaced the FIFO leaves it empty.
+  const int read_end = open(fifo.c_str(), O_RDONLY | O_NONBLOCK);
+  ASSERT_GE(read_end, 0);
+  const Result r = simulate({"--config", kFixedTipYaml, "--duration", "0.5", "--output", fifo});
+  std::string received;
+  char buffer[4096];
+  for (ssize_t n; (n = read(read_end, buffer, sizeof buffer)) > 0;) received.append(buffer, static_cast<std::size_t>(n));
+  close(read_end);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const Result to_stdout = simulate({"--config", kFixedTipYaml, "--duration", "0.5"});
+  EXPECT_EQ(received, to_stdout.out);
+  struct stat st {};
+  ASSERT_EQ(lstat(fifo.c_str(), &st), 0);
+  EXPECT_TRUE(S_ISFIFO(st.st_mode)) << "the FIFO was replaced";
+  EXPECT_EQ(directory_entries(output_dir_), std::vector<std::string>{"rows"});  // no temporary left
+}
+
+TEST_F(SimulateTest, ALinkToACharacterDeviceIsWrittenThroughAndNeitherIsReplaced) {
+  // A scratch device-like path: a link to /dev/null in the test's directory. Were the device
+  // replaced, the rename would land on the link, never on /dev/null itself.
+  const std::string device = output_dir_ + "/null";
+  ASSERT_EQ(symlink("/dev/null", device.c_str()), 0);
+  const Result r = simulate({"--config", kFixedTipYaml, "--duration", "0.5", "--output", device});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.out, "");
+  struct stat st {};
+  ASSERT_EQ(lstat(device.c_str(), &st), 0);
+  EXPECT_TRUE(S_ISLNK(st.st_mode)) << "the link was replaced";
+  ASSERT_EQ(stat("/dev/null", &st), 0);
+  EXPECT_TRUE(S_ISCHR(st.st_mode));
+  EXPECT_EQ(directory_entries(output_dir_), std::vector<std::string>{"null"});
+}
+
+TEST_F(SimulateTest, ALinkToARegularFileReplacesTheFileAndKeepsTheLink) {
+  const std::string file = dir_ + "/target.csv", link = output_dir_ + "/latest.csv";
+  std::ofstream(file) << "previous run\n";
+  ASSERT_EQ(symlink(file.c_str(), link.c_str()), 0);
+  const Result r = simulate({"--config", kFixedTipYaml, "--duration", "0.5", "--output", link});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  struct stat st {};
+  ASSERT_EQ(lstat(link.c_str(), &st), 0);
+  EXPECT_TRUE(S_ISLNK(st.st_mode)) << "the link was replaced by a file";
+  EXPECT_EQ(read_file(file), simulate({"--config", kFixedTipYaml, "--duration", "0.5"}).out);
+}
+
+TEST_F(SimulateTest, ADirectoryAsOutputIsRefusedWithCode2AndADashIsStdout) {
+  const Result r = simulate({"--config", kFixedTipYaml, "--duration", "0.1", "--output", output_dir_});
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_EQ(r.out, "");
+  EXPECT_NE(r.err.find("--output"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("directory"), std::string::npos) << r.err;
+  EXPECT_TRUE(directory_entries(output_dir_).empty());
+  const Result dash = simulate({"--config", kFixedTipYaml, "--duration", "0.1", "--output", "-"});
+  ASSERT_EQ(dash.exit_code, 0) << dash.err;
+  EXPECT_EQ(dash.out, simulate({"--config", kFixedTipYaml, "--duration", "0.1"}).out);
+  EXPECT_FALSE(exists("-"));
 }
 
 TEST_F(SimulateTest, FixedTipSceneFileConservesEnergyOverTenSeconds) {
