@@ -1,5 +1,6 @@
 #include "spinning_top/config.hpp"
 
+#include <algorithm>
 #include <cerrno>
 #include <cstdlib>
 
@@ -61,11 +62,41 @@ double parse_number(const std::string& key, const std::string& text) {
   return value;
 }
 
+std::vector<std::string> parameter_keys() {
+  std::vector<std::string> keys;
+  for (const ParameterSpec& spec : parameter_specs()) keys.push_back(spec.key);
+  return keys;
+}
+
+std::string nearest_name(const std::string& name, const std::vector<std::string>& known) {
+  std::string best;
+  std::size_t best_distance = 3;
+  for (const std::string& candidate : known) {
+    // Levenshtein distance, one row at a time.
+    std::vector<std::size_t> row(candidate.size() + 1);
+    for (std::size_t j = 0; j <= candidate.size(); ++j) row[j] = j;
+    for (std::size_t i = 1; i <= name.size(); ++i) {
+      std::size_t diagonal = row[0];
+      row[0] = i;
+      for (std::size_t j = 1; j <= candidate.size(); ++j) {
+        const std::size_t above = row[j];
+        row[j] = std::min({row[j] + 1, row[j - 1] + 1, diagonal + (name[i - 1] == candidate[j - 1] ? 0 : 1)});
+        diagonal = above;
+      }
+    }
+    const std::size_t distance = row[candidate.size()];
+    if (distance < best_distance && 2 * distance < name.size()) best_distance = distance, best = candidate;
+  }
+  return best;
+}
+
 SceneConfig parse_scene_config(const ParameterMap& values, bool require_all) {
+  const std::vector<std::string> keys = parameter_keys();
   for (const auto& [key, value] : values) {
-    bool known = false;
-    for (const ParameterSpec& spec : parameter_specs()) known = known || key == spec.key;
-    if (!known) throw InvalidParameter(key, "unknown key (see --help for the list of keys)");
+    if (std::find(keys.begin(), keys.end(), key) != keys.end()) continue;
+    const std::string nearest = nearest_name(key, keys);
+    throw InvalidParameter(key, "unknown key" + (nearest.empty() ? std::string() : " (did you mean " + nearest + "?)") +
+                                    " (see --help for the list of keys)");
   }
   auto text = [&](const ParameterSpec& spec) -> std::string {
     const auto it = values.find(spec.key);

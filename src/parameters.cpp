@@ -52,8 +52,9 @@ void validate(const InitialConditions& ic) {
   require_finite("initial/spin_angle", ic.spin_angle);
   require_finite("initial/velocity_x", ic.velocity_x);
   require_finite("initial/velocity_y", ic.velocity_y);
-  // e_Zz = cos(tilt) > 0: the axis must start above the floor.
-  if (!(std::cos(ic.tilt) > 0.0))
+  // e_Zz = cos(tilt) > 0: the axis must start above the floor. |tilt| < pi/2 as documented, not
+  // cos(tilt) > 0 alone, which also let 2 pi + 0.3 through.
+  if (!(std::abs(ic.tilt) < 0.5 * M_PI && std::cos(ic.tilt) > 0.0))
     throw InvalidParameter("initial/tilt", "the axis must start above the floor: need |tilt| < pi/2 rad, got " +
                                                format(ic.tilt));
 }

@@ -252,13 +252,21 @@ void flatten(const YAML::Node& node, const std::string& prefix, const std::strin
 }
 
 ParameterMap load_scene_file(const std::string& path) {
+  struct stat st {};
+  if (stat(path.c_str(), &st) == 0 && S_ISDIR(st.st_mode))
+    throw UsageError("--config: '" + path + "' is a directory; give a scene file (e.g. config/fixed_tip.yaml)");
   std::ifstream in(path);
   if (!in) throw UsageError("--config: cannot read '" + path + "': " + std::strerror(errno));
   std::stringstream text;
   text << in.rdbuf();
   YAML::Node root;
   try {
-    root = YAML::Load(text.str());
+    // One document: a second one (after ---) would otherwise be ignored without a word.
+    const std::vector<YAML::Node> documents = YAML::LoadAll(text.str());
+    if (documents.size() > 1)
+      throw UsageError(path + ": has " + std::to_string(documents.size()) +
+                       " YAML documents (separated by ---); a scene file is one");
+    if (!documents.empty()) root = documents.front();
   } catch (const YAML::Exception& e) {
     std::ostringstream where;
     where << path << ":" << e.mark.line + 1 << ":" << e.mark.column + 1 << ": malformed YAML: " << e.msg;

@@ -409,6 +409,8 @@ TEST_F(SimulateTest, BadInputExitsWithCode2NamesTheCulpritAndWritesNothing) {
   const std::string twice = write_yaml("twice.yaml", scene + "mass: 0.2\n");
   const std::string no_value = write_yaml("no_value.yaml", scene + "tolerance:\n");
   const std::string not_a_number = write_yaml("nan.yaml", scene + "step: fast\n");
+  // A second document would be ignored without a word: its "mass: -1" never checked.
+  const std::string two_documents = write_yaml("two_documents.yaml", scene + "---\nmass: -1\n");
 
   struct Case {
     std::vector<std::string> args;
@@ -430,6 +432,10 @@ TEST_F(SimulateTest, BadInputExitsWithCode2NamesTheCulpritAndWritesNothing) {
       {{"--config", twice}, "mass"},
       {{"--config", malformed}, "malformed.yaml"},
       {{"--config", dir_ + "/missing.yaml"}, "missing.yaml"},
+      {{"--config", two_documents}, "2 YAML documents"},
+      {{"--config", output_dir_}, "is a directory"},                                     // not "scene missing"
+      {{"--config", kFixedTipYaml, "--set", "mas=0.1"}, "did you mean mass?"},
+      {{"--config", kFixedTipYaml, "--set", "initial/tilt=6.5831853"}, "initial/tilt"},  // 2 pi + 0.3
       {{}, "--config"},
       {{"--config", kFixedTipYaml, "--duration", "0"}, "--duration"},
       {{"--config", kFixedTipYaml, "--duration", "-1"}, "--duration"},

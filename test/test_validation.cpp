@@ -105,6 +105,9 @@ TEST(InvalidParameters, AxialMomentAboveTwiceTheTransverseIsNoRigidBody) {
 TEST(InvalidParameters, AxisMustStartAboveTheFloor) {
   for (double bad : {std::nextafter(M_PI / 2, 2.0), -std::nextafter(M_PI / 2, 2.0), 2.0, M_PI, -3.0})
     expect_refused("initial/tilt", [&](SceneConfig& c) { c.initial.tilt = bad; }, "|theta0| >= pi/2");
+  // Angles a turn away from a valid one have cos > 0 too, but the documented range is |theta0| < pi/2.
+  for (double bad : {2 * M_PI + 0.3, -2 * M_PI + 0.3, 4 * M_PI})
+    expect_refused("initial/tilt", [&](SceneConfig& c) { c.initial.tilt = bad; }, "a turn beyond the range");
 }
 
 TEST(InvalidParameters, FrictionAndInitialVelocityOnlyInTheViscousScene) {
@@ -183,6 +186,16 @@ TEST(InvalidParameters, ParsedKeysAreCheckedByName) {
   values["masss"] = "0.1";
   expect_parse_refused(values, true, "masss", "unknown key");
   expect_parse_refused(values, false, "masss", "unknown key (node)");
+  // A near miss says what it probably meant; a word far from every key does not guess.
+  try {
+    parse_scene_config(values, true);
+  } catch (const InvalidParameter& e) {
+    EXPECT_NE(std::string(e.what()).find("did you mean mass?"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(nearest_name("mas", parameter_keys()), "mass");
+  EXPECT_EQ(nearest_name("initial/tlit", parameter_keys()), "initial/tilt");
+  EXPECT_EQ(nearest_name("gravitation", parameter_keys()), "");
+  EXPECT_EQ(nearest_name("xy", parameter_keys()), "");
   for (const char* text : {"abc", "0.1kg", "", "1e999"}) {
     values = scene_file();
     values["mass"] = text;

@@ -33,4 +33,11 @@ SceneConfig parse_scene_config(const ParameterMap& values, bool require_all);
 /// Parses a whole decimal number in text (no trailing characters); throws InvalidParameter.
 double parse_number(const std::string& key, const std::string& text);
 
+/// The known name nearest to `name` if it is a near miss (at most 2 edits, Levenshtein, and
+/// fewer than half its letters), else "": for "did you mean" hints on unknown keys.
+std::string nearest_name(const std::string& name, const std::vector<std::string>& known);
+
+/// Every key of parameter_specs(), as strings.
+std::vector<std::string> parameter_keys();
+
 }  // namespace spinning_top

@@ -38,6 +38,18 @@ bool is_number(const char* text) {
 
 ParameterMap read_scene_parameters(const ros::NodeHandle& private_nh) {
   ParameterMap values;
+  // A group of keys (initial/...) given as anything but a dictionary (`initial: 5`) would hide
+  // its keys, which would then silently take their defaults.
+  for (const ParameterSpec& spec : parameter_specs()) {
+    const std::string key = spec.key;
+    const std::size_t slash = key.find('/');
+    if (slash == std::string::npos) continue;
+    const std::string group = key.substr(0, slash);
+    XmlRpc::XmlRpcValue value;
+    if (private_nh.getParam(group, value) && value.getType() != XmlRpc::XmlRpcValue::TypeStruct)
+      throw InvalidParameter(group, std::string("is ") + type_name(value.getType()) + ", expected a dictionary of " +
+                                        group + "/... keys (e.g. " + key + ")");
+  }
   for (const ParameterSpec& spec : parameter_specs()) {
     XmlRpc::XmlRpcValue value;
     if (!private_nh.getParam(spec.key, value)) continue;
@@ -50,9 +62,9 @@ ParameterMap read_scene_parameters(const ros::NodeHandle& private_nh) {
         if (!is_text) { values[spec.key] = std::to_string(static_cast<int>(value)); continue; }
         break;
       case XmlRpc::XmlRpcValue::TypeString:
-        // A number given as a string ("0.1") is passed on: parse_scene_config says if it is not one.
-        values[spec.key] = static_cast<std::string>(value);
-        continue;
+        // Names only: a number given as a string ("9.8") is a string, refused like any other type.
+        if (is_text) { values[spec.key] = static_cast<std::string>(value); continue; }
+        break;
       default:
         break;
     }

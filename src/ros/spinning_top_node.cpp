@@ -8,6 +8,7 @@
 #include <visualization_msgs/MarkerArray.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 
@@ -33,6 +34,13 @@ void require(bool condition, const std::string& key, const std::string& reason) 
 void require_frame(const std::string& key, const std::string& frame) {
   require(!frame.empty(), key, "must not be empty");
   require(frame[0] != '/', key, "'" + frame + "' must not start with '/' (tf2 frame ids have no leading slash)");
+  // ROS names' characters (a letter first, then letters, digits, '_' and '/' between names): what
+  // tf2, URDF and rviz handle everywhere; a space or a '-' breaks tools that parse frame lists.
+  bool valid = std::isalpha(static_cast<unsigned char>(frame[0])) != 0 && frame.back() != '/' &&
+               frame.find("//") == std::string::npos;
+  for (const char c : frame) valid = valid && (std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '/');
+  require(valid, key, "'" + frame + "' is not a valid frame id: a letter, then letters, digits, '_' and '/' "
+                      "between names (REP-105 names such as world, top)");
 }
 
 bool finite(const Vector3& v) { return v.allFinite(); }
@@ -96,7 +104,14 @@ void warn_about_unknown_keys(const ros::NodeHandle& private_nh) {
     bool known = false;
     for (const ParameterSpec& spec : parameter_specs()) known = known || key == spec.key;
     for (const char* node_key : node_keys) known = known || key == node_key;
-    if (!known) ROS_WARN("spinning_top: ignoring unknown parameter %s", name.c_str());
+    if (known) continue;
+    std::vector<std::string> candidates = parameter_keys();
+    candidates.insert(candidates.end(), std::begin(node_keys), std::end(node_keys));
+    const std::string nearest = nearest_name(key, candidates);
+    if (nearest.empty())
+      ROS_WARN("spinning_top: ignoring unknown parameter %s", name.c_str());
+    else
+      ROS_WARN("spinning_top: ignoring unknown parameter %s (did you mean ~%s?)", name.c_str(), nearest.c_str());
   }
 }
 

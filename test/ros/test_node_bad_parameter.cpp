@@ -66,15 +66,27 @@ TEST(NodeBadParameter, NegativeRealTimeFactor) {
   expect_refused("bad_rtf", "_real_time_factor:=-1", "real_time_factor");
 }
 TEST(NodeBadParameter, FrameWithLeadingSlash) { expect_refused("bad_frame", "_world_frame:=/world", "world_frame"); }
+TEST(NodeBadParameter, FrameWithASpace) { expect_refused("bad_frame_space", "'_world_frame:=my world'", "world_frame"); }
+// A scalar where the initial state's dictionary belongs would hide every initial/ key.
+TEST(NodeBadParameter, InitialThatIsNotADictionary) { expect_refused("bad_initial", "_initial:=5", "initial"); }
+// A number given as a string is a string: refused like any other wrong type (README).
+TEST(NodeBadParameter, GravityGivenAsAString) {
+  ros::param::set("/bad_gravity_text/gravity", std::string("9.8"));
+  expect_refused("bad_gravity_text", "", "gravity");
+  ros::param::del("/bad_gravity_text/gravity");
+}
 
 // The control: the same binary with valid parameters runs (and publishes) until stopped.
 TEST(NodeBadParameter, ValidParametersKeepTheNodeRunning) {
   ros::NodeHandle nh;
   Recorder<geometry_msgs::PointStamped> points(nh, "/good/contact_point");
   const Outcome outcome = run_node("good", "_rate:=100 _publish_clock:=false _body_frame:=good_top "
-                                   "_contact_frame:=good_contact", 3);
+                                   "_contact_frame:=good_contact _mas:=0.2", 3);
   EXPECT_EQ(outcome.exit_code, 124) << outcome.output;
   EXPECT_GT(points.size(), 0u);
+  // An unknown key is a warning, not fatal, with what it probably meant.
+  EXPECT_NE(outcome.output.find("ignoring unknown parameter /good/mas (did you mean ~mass?)"), std::string::npos)
+      << outcome.output;
 }
 
 int main(int argc, char** argv) {
