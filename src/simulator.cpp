@@ -52,6 +52,9 @@ SceneType parse_scene(const std::string& name) {
 void validate(const IntegratorSettings& settings) {
   if (!std::isfinite(settings.step) || !(settings.step > 0.0))
     throw InvalidParameter("step", "must be a positive number of seconds");
+  // 1e-9 s resolves the fastest motion accepted (1e6 rad/s) to 1e-3 rad per step; below it a
+  // step only adds substeps (1e-300 s overflowed their count).
+  if (!(settings.step >= 1e-9)) throw InvalidParameter("step", "must be at least 1e-9 s");
   // Below ~100 ulps the error estimate is round-off and the controller cannot converge.
   if (!std::isfinite(settings.tolerance) || !(settings.tolerance >= 1e-14) || !(settings.tolerance < 1.0))
     throw InvalidParameter("tolerance", "must lie in [1e-14, 1)");
@@ -157,10 +160,47 @@ void validate_step_against_motion(const SceneConfig& config) {
 
 }  // namespace
 
+namespace {
+
+/// The fastest motion the core accepts [rad/s]: 1e6 rad/s, a top spinning at 160 000 turns per
+/// second. Beyond it a time-stepper needs more than ~1e6 steps per simulated second (over a
+/// second of CPU per simulated second: the node could not keep its tick), and the closed form's
+/// phase, ~rate x t x 1e-16, drifts by more than 1e-9 rad per second. Without it a spin of 1e22
+/// rad/s ran `exact` into quaternions of 1e290 and NaN forces, and a spin of 1.4e154 overflowed
+/// the rates themselves (issue 10).
+constexpr double kMaxMotionRate = 1e6;
+
+/// Refuses a configuration whose fastest motion exceeds kMaxMotionRate, naming the key that
+/// drives it.
+void validate_motion_rates(const SceneConfig& config) {
+  const MotionRates rates = motion_rates(config);
+  const InitialConditions& ic = config.initial;
+  auto refuse = [&](const std::string& key, const std::string& motion, double rate) {
+    throw InvalidParameter(key, "the " + motion + " would be " + format_seconds(rate) + " rad/s, above the " +
+                                    format_seconds(kMaxMotionRate) +
+                                    " rad/s the simulator resolves (doc/integrators.md, \"Motion rates\")");
+  };
+  if (!(rates.nutation <= kMaxMotionRate)) refuse("initial/spin", "nutation C |omega_Z| / A", rates.nutation);
+  if (!(rates.pendulum <= kMaxMotionRate)) refuse("gravity", "pendulum rate sqrt(m g h / A)", rates.pendulum);
+  if (!(rates.attitude <= kMaxMotionRate)) {
+    // The body rate |omega| / 2 comes from the initial rates: name the largest.
+    const std::pair<const char*, double> candidates[] = {{"initial/spin", std::abs(ic.spin)},
+                                                         {"initial/precession_rate", std::abs(ic.precession_rate)},
+                                                         {"initial/nutation_rate", std::abs(ic.nutation_rate)}};
+    const auto* largest = &candidates[0];
+    for (const auto& c : candidates)
+      if (!(c.second <= largest->second)) largest = &c;
+    refuse(largest->first, "rotation rate |omega| / 2", rates.attitude);
+  }
+}
+
+}  // namespace
+
 void validate(const SceneConfig& config) {
   validate(config.top);
   validate(config.initial);
   validate(config.integrator);
+  validate_motion_rates(config);
   if (config.scene != SceneType::kViscous) {
     if (config.top.friction != 0.0)
       throw InvalidParameter("friction", "applies to the viscous scene only (this scene is " +

@@ -435,6 +435,9 @@ TEST_F(SimulateTest, BadInputExitsWithCode2NamesTheCulpritAndWritesNothing) {
       {{"--config", two_documents}, "2 YAML documents"},
       {{"--config", output_dir_}, "is a directory"},                                     // not "scene missing"
       {{"--config", kFixedTipYaml, "--set", "mas=0.1"}, "did you mean mass?"},
+      {{"--config", kFixedTipYaml, "--set", "initial/spin=1e22"}, "initial/spin"},   // was garbage, exit 0
+      {{"--config", kFixedTipYaml, "--set", "initial/spin=1.4e154"}, "initial/spin"},  // was SIGABRT
+      {{"--config", kFixedTipYaml, "--set", "integrator=rk4", "--set", "step=1e-300"}, "step"},
       {{"--config", kFixedTipYaml, "--set", "initial/tilt=6.5831853"}, "initial/tilt"},  // 2 pi + 0.3
       {{}, "--config"},
       {{"--config", kFixedTipYaml, "--duration", "0"}, "--duration"},

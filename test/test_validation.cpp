@@ -131,6 +131,32 @@ TEST(InvalidParameters, StepAndToleranceMustBeUsable) {
   expect_refused("step", [](SceneConfig& c) { c.integrator.step = 1.0; }, "step beyond the nutation", rk4);
   for (double bad : {0.0, -1e-8, 1e-16, 1.0, 2.0})
     expect_refused("tolerance", [&](SceneConfig& c) { c.integrator.tolerance = bad; }, "tolerance out of range");
+  // Below 1e-9 s a step only multiplies substeps: 1e-300 overflowed their count (a lift-off with
+  // five times the energy, exit 0).
+  for (double bad : {1e-300, 1e-10})
+    expect_refused("step", [&](SceneConfig& c) { c.integrator.step = bad; }, "step below 1e-9 s", rk4);
+}
+
+// The fastest motion the simulator resolves is 1e6 rad/s: above it a configuration is refused
+// naming the key that drives the motion, in every scene and for every method (exact too: a spin of
+// 1e22 rad/s gave it quaternions of 1e290, and 1.4e154 overflowed the rates into a crash).
+TEST(InvalidParameters, MotionsFasterThanTheSimulatorResolvesAreRefusedByTheirKey) {
+  for (const SceneType scene : {SceneType::kFixedTip, SceneType::kFrictionless, SceneType::kViscous}) {
+    SceneConfig config = valid_viscous();
+    config.scene = scene;
+    if (scene != SceneType::kViscous) {
+      config.top.friction = 0.0;
+      config.initial.velocity_x = config.initial.velocity_y = 0.0;
+    }
+    for (const double spin : {1e7, 1e12, 1e22, 1.4e154, 1e300})
+      expect_refused("initial/spin", [&](SceneConfig& c) { c.initial.spin = spin; }, "spin " + std::to_string(spin), config);
+    expect_refused("initial/precession_rate", [](SceneConfig& c) { c.initial.precession_rate = 1e8; }, "precession", config);
+    expect_refused("initial/nutation_rate", [](SceneConfig& c) { c.initial.nutation_rate = -1e8; }, "nutation", config);
+    expect_refused("gravity", [](SceneConfig& c) { c.top.gravity = 1e14; }, "gravity", config);
+    SceneConfig fast = config;
+    fast.initial.spin = 5e5;  // a fast but resolvable top: accepted
+    EXPECT_NO_THROW(make_simulator(fast)) << to_string(scene);
+  }
 }
 
 TEST(InvalidParameters, UnknownSceneAndIntegratorNames) {

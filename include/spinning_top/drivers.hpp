@@ -19,6 +19,7 @@
 #include "spinning_top/events.hpp"
 #include "spinning_top/hot_path.hpp"
 #include "spinning_top/kinematics.hpp"
+#include "spinning_top/parameters.hpp"
 
 namespace spinning_top {
 
@@ -83,7 +84,14 @@ class FixedStepDriver : public DriverBase<Model> {
     // A request of exactly max_step arrives as t_target - t_start rounded at the size of t
     // (relative error ~ eps t / span, 1e-9 at t = 1e4 s, 1 ms): allow substeps up to 1e-6
     // above max_step rather than taking a second, tiny substep for rounding.
-    const long n = std::max(1L, static_cast<long>(std::ceil(span / max_step_ * (1.0 - 1e-6))));
+    // The substep count, checked before the conversion: past ~9.2e18 the cast overflowed and one
+    // substep spanned the whole request (step 1e-300 s gave a lift-off with 5x the energy).
+    const double count = std::ceil(span / max_step_ * (1.0 - 1e-6));
+    if (!(count <= kMaxSubsteps))
+      throw InvalidParameter("step", "a request of " + std::to_string(span) + " s needs " + std::to_string(count) +
+                                         " substeps of " + std::to_string(max_step_) + " s, more than the " +
+                                         std::to_string(kMaxSubsteps) + " one request may take");
+    const long n = std::max(1L, static_cast<long>(count));
     const double dt = span / static_cast<double>(n);
     for (long i = 1; i <= n; ++i) {
       const double t_new = (i == n) ? t_target : t_start + static_cast<double>(i) * dt;
@@ -120,6 +128,8 @@ class FixedStepDriver : public DriverBase<Model> {
     std::snprintf(buffer, sizeof buffer, "%g s", s);
     return buffer;
   }
+  /// Substeps one request may take: 1e12 (hours of CPU), far below the count's overflow.
+  static constexpr double kMaxSubsteps = 1e12;
   double max_step_;
   Method method_;
   EventMonitor<Model> monitor_;

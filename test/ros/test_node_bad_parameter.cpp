@@ -66,6 +66,8 @@ TEST(NodeBadParameter, NegativeRealTimeFactor) {
   expect_refused("bad_rtf", "_real_time_factor:=-1", "real_time_factor");
 }
 TEST(NodeBadParameter, FrameWithLeadingSlash) { expect_refused("bad_frame", "_world_frame:=/world", "world_frame"); }
+// A spin the simulator cannot resolve: the node used to advertise, then hang (issue 10).
+TEST(NodeBadParameter, SpinBeyondWhatTheSimulatorResolves) { expect_refused("bad_spin", "_initial/spin:=1e12", "initial/spin"); }
 TEST(NodeBadParameter, FrameWithASpace) { expect_refused("bad_frame_space", "'_world_frame:=my world'", "world_frame"); }
 // A scalar where the initial state's dictionary belongs would hide every initial/ key.
 TEST(NodeBadParameter, InitialThatIsNotADictionary) { expect_refused("bad_initial", "_initial:=5", "initial"); }
