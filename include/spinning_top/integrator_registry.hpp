@@ -25,7 +25,8 @@ const char* to_string(IntegratorKind kind);  ///< "automatic", "fixed step", "ad
 enum class StepLimit {
   kNone,
   kOscillations,            ///< 2 / the fastest oscillation (nutation, pendulum, rotation)
-  kOscillationsAndFriction  ///< also 2 / lambda, the friction rate: an explicit method's stability
+  kOscillationsAndFriction,  ///< also 2 / lambda, the friction rate: an explicit method's stability
+  kOscillationsAndStiffFriction  ///< also 50 / lambda: a linearly implicit method's (rodas4) stability
 };
 
 /// Bit of a scene in IntegratorInfo::scenes.
