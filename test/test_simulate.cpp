@@ -281,6 +281,38 @@ TEST_F(SimulateTest, ADirectoryAsOutputIsRefusedWithCode2AndADashIsStdout) {
   EXPECT_FALSE(exists("-"));
 }
 
+// Determinism (doc/simulate.md): the same inputs on the same build give the same bytes, and the
+// default's rows do not depend on the output rate either (exact answers each instant in closed
+// form, dop853 and radau5 by dense output, so requests never move their steps): the rows at the
+// instants two rates share are equal to the bit.
+TEST_F(SimulateTest, TheDefaultsRowsAreBitIdenticalAcrossRunsAndOutputRates) {
+  for (const char* scene : {"fixed_tip", "frictionless", "viscous"}) {
+    const std::string file = std::string(SPINNING_TOP_SOURCE_DIR) + "/config/" + scene + ".yaml";
+    for (const char* friction : {"", "friction=1e5"}) {
+      if (*friction != '\0' && std::string(scene) != "viscous") continue;
+      std::vector<std::string> args = {"--config", file, "--duration", "2"};
+      if (*friction != '\0') args.insert(args.end(), {"--set", friction});
+      const Result first = simulate(args), again = simulate(args);
+      ASSERT_EQ(first.exit_code, 0) << first.err;
+      EXPECT_EQ(first.out, again.out) << scene << " " << friction << ": two runs differ";
+      std::vector<std::string> fine_args = args;
+      fine_args.insert(fine_args.end(), {"--output-rate", "1000"});
+      const Result fine = simulate(fine_args);
+      ASSERT_EQ(fine.exit_code, 0) << fine.err;
+      // Rows are t = i / rate: every 10th row at 1 kHz is a row at 100 Hz, compared as text.
+      std::vector<std::string> coarse_rows, fine_rows;
+      std::istringstream a(first.out), b(fine.out);
+      for (std::string line; std::getline(a, line);) coarse_rows.push_back(line);
+      for (std::string line; std::getline(b, line);) fine_rows.push_back(line);
+      ASSERT_EQ(coarse_rows.size(), 203u);  // comment, header, 201 rows
+      ASSERT_EQ(fine_rows.size(), 2003u);
+      EXPECT_EQ(coarse_rows[0], fine_rows[0]);  // the same method
+      for (std::size_t i = 2; i < coarse_rows.size(); ++i)
+        EXPECT_EQ(coarse_rows[i], fine_rows[2 + 10 * (i - 2)]) << scene << " " << friction << ", row " << i;
+    }
+  }
+}
+
 TEST_F(SimulateTest, FixedTipSceneFileConservesEnergyOverTenSeconds) {
   const Result r = simulate({"--config", kFixedTipYaml, "--duration", "10"});
   ASSERT_EQ(r.exit_code, 0) << r.err;
