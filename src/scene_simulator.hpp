@@ -78,6 +78,14 @@ class SceneSimulator final : public Simulator {
     const typename Model::State y = driver_.state();
     const Event event = driver_.event();
     driver.reset(model, t, y);
+    // A change that puts the current state off the model's validity at once (a lower g under a
+    // nutating top: the floor would have to pull the tip, R < 0) is refused rather than applied
+    // as an instant event whose snapshot shows that R: a snapshot is always a valid state.
+    if (event == Event::kNone && driver.event() == Event::kLiftOff)
+      throw InvalidParameter(top.gravity != config_.top.gravity ? "gravity" : "friction",
+                             "at the current state the floor would have to pull the tip down (R = " +
+                                 std::to_string(model.outputs(driver.state()).normal_force) +
+                                 " N): the change would lift the tip off at once; refused, the run goes on");
     config_ = next;
     model_ = std::move(model);
     driver_ = std::move(driver);

@@ -256,5 +256,51 @@ TEST(InvalidParameters, RefusedUpdateLeavesTheRunUnchanged) {
   EXPECT_EQ(sim->advance_to(0.02), Event::kNone);
 }
 
+// A live change of g that would need the floor to pull the tip at the current state (R < 0) is
+// refused naming gravity, and the run goes on unchanged: before, it was applied as an instant
+// lift-off whose snapshot published that negative R (issue 10). Every scene.
+TEST(InvalidParameters, AnUpdateThatWouldLiftTheTipOffAtOnceIsRefusedAndTheSnapshotStaysValid) {
+  for (const SceneType scene : {SceneType::kFixedTip, SceneType::kFrictionless, SceneType::kViscous}) {
+    SceneConfig config;
+    config.scene = scene;
+    config.top.friction = scene == SceneType::kViscous ? 0.5 : 0.0;
+    config.initial.tilt = 0.3;
+    config.initial.spin = 150.0;
+    config.initial.nutation_rate = 10.0;  // a wide nutation: R swings with theta's acceleration
+    auto sim = make_simulator(config);
+    auto twin = make_simulator(config);
+    TopParameters weak = config.top;
+    weak.gravity = 0.0;
+    int refused = 0;
+    for (int k = 1; k <= 100 && refused == 0; ++k) {
+      const double t = 1e-3 * k;
+      ASSERT_EQ(sim->advance_to(t), Event::kNone);
+      ASSERT_EQ(twin->advance_to(t), Event::kNone);
+      // Try the change on a copy of the state's simulator: the twin stays the reference.
+      const Snapshot before = sim->snapshot();
+      try {
+        auto probe = make_simulator(config);
+        ASSERT_EQ(probe->advance_to(t), Event::kNone);
+        probe->update(weak, config.integrator);
+        // Accepted: the state is valid under g = 0 too.
+        EXPECT_EQ(probe->event(), Event::kNone) << to_string(scene) << ": an update applied as an instant event";
+        EXPECT_GE(probe->snapshot().outputs.normal_force, 0.0) << to_string(scene) << " at " << t;
+      } catch (const InvalidParameter& e) {
+        EXPECT_EQ(e.parameter(), "gravity") << e.what();
+        // The same refusal on the running simulator changes nothing.
+        EXPECT_THROW(sim->update(weak, config.integrator), InvalidParameter);
+        EXPECT_EQ(sim->config().top.gravity, config.top.gravity);
+        EXPECT_EQ(sim->time(), t);
+        EXPECT_EQ(sim->snapshot().attitude.coeffs(), before.attitude.coeffs());
+        EXPECT_GE(sim->snapshot().outputs.normal_force, 0.0);
+        ++refused;
+      }
+    }
+    EXPECT_EQ(refused, 1) << to_string(scene) << ": no state within 0.1 s where g = 0 would need R < 0";
+    ASSERT_EQ(sim->advance_to(0.2), twin->advance_to(0.2));
+    EXPECT_EQ(sim->snapshot().attitude.coeffs(), twin->snapshot().attitude.coeffs()) << to_string(scene);
+  }
+}
+
 }  // namespace
 }  // namespace spinning_top
