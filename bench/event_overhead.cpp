@@ -17,15 +17,12 @@
 #include <vector>
 
 #include "spinning_top/simulator.hpp"
+#include "bench_support.hpp"
 
 namespace {
-using namespace spinning_top;
 
-double cpu_seconds() {
-  timespec ts;
-  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
-  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
-}
+using spinning_top::bench::cpu_seconds;
+using namespace spinning_top;
 
 double median(std::vector<double> v) {
   std::sort(v.begin(), v.end());

@@ -18,16 +18,13 @@
 #include <vector>
 
 #include "spinning_top/simulator.hpp"
+#include "bench_support.hpp"
 
 using namespace spinning_top;
 
 namespace {
 
-double cpu_seconds() {
-  timespec ts;
-  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
-  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
-}
+using spinning_top::bench::cpu_seconds;
 
 double rotation_angle(const Quaternion& a, const Quaternion& b) {
   return 2.0 * std::asin(std::min(1.0, (a.conjugate() * b).vec().norm()));

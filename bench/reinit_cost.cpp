@@ -30,16 +30,15 @@
 #include <vector>
 
 #include "spinning_top/simulator.hpp"
+#include "bench_support.hpp"
 
 using namespace spinning_top;
 
 namespace {
 
-double thread_cpu_seconds() {
-  timespec ts;
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
-}
+using spinning_top::bench::csv_field;
+using spinning_top::bench::formatted;
+using spinning_top::bench::thread_cpu_seconds;
 
 struct Case {
   std::string family, what;
@@ -217,21 +216,6 @@ double percentile(const std::vector<double>& sorted, double p) {
   return sorted[std::min(sorted.size(), std::max<std::size_t>(rank, 1)) - 1];
 }
 
-std::string csv_field(const std::string& text) {
-  if (text.find_first_of(",\"\n") == std::string::npos) return text;
-  std::string quoted = "\"";
-  for (const char ch : text) {
-    if (ch == '"') quoted += '"';
-    quoted += ch;
-  }
-  return quoted + "\"";
-}
-
-std::string formatted(const char* format, double value) {
-  char text[32];
-  std::snprintf(text, sizeof text, format, value);
-  return text;
-}
 std::string microseconds(double seconds) { return formatted("%.3g", 1e6 * seconds); }
 
 }  // namespace

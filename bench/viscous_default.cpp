@@ -29,22 +29,19 @@
 #include <memory>
 #include <string>
 #include <vector>
-// GCC 12 flags odeint's copy of a stepper's scratch state as uninitialized (as in work_precision).
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Wuninitialized"
-#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
-#include <boost/numeric/odeint.hpp>
-#pragma GCC diagnostic pop
 
 #include "spinning_top/drivers.hpp"
 #include "spinning_top/integrators/radau.hpp"
 #include "spinning_top/scenes/viscous.hpp"
 #include "spinning_top/simulator.hpp"
+#include "bench_support.hpp"
 
 namespace odeint = boost::numeric::odeint;
 using namespace spinning_top;
 
 namespace {
+
+using spinning_top::bench::cpu_seconds;
 
 constexpr double kInterval = 1e-3;        // the node's default request period
 constexpr double kAttitudeTarget = 1e-9;  // rad
@@ -52,12 +49,6 @@ constexpr double kNormalForceTarget = 1e-8;  // m g
 // Exact decades (a tolerance computed by repeated division differs in its last bits, and at 2000
 // rad/s over 10 s that alone moves the attitude by ~2e-9 rad: the runs are that sensitive).
 constexpr double kTolerances[] = {1e-8, 1e-9, 1e-10, 1e-11, 1e-12, 1e-13, 1e-14};
-
-double cpu_seconds() {
-  timespec ts;
-  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
-  return ts.tv_sec + 1e-9 * ts.tv_nsec;
-}
 
 /// Median CPU time of `repeats` runs (the machine is shared: the median filters the others' load).
 double median_cpu(const std::function<void()>& run, int repeats) {

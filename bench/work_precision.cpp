@@ -11,13 +11,6 @@
 
 #include <algorithm>
 #include <array>
-// GCC 12 flags odeint's copy of a stepper's scratch state (rkf78's m_x_tmp, overwritten before
-// use) as uninitialized, depending on inlining: a false positive inside Boost.
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Wuninitialized"
-#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
-#include <boost/numeric/odeint.hpp>
-#pragma GCC diagnostic pop
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -34,6 +27,7 @@
 #include "reference_solution.hpp"
 #include "spinning_top/integrator_registry.hpp"
 #include "spinning_top/simulator.hpp"
+#include "bench_support.hpp"
 #include "spinning_top/scenes/fixed_tip.hpp"
 #include "spinning_top/scenes/frictionless.hpp"
 #include "spinning_top/scenes/viscous.hpp"
@@ -44,11 +38,9 @@ using bench::QuadratureReference;
 
 namespace {
 
-double cpu_seconds() {
-  timespec ts;
-  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
-  return ts.tv_sec + 1e-9 * ts.tv_nsec;
-}
+using spinning_top::bench::cpu_seconds;
+using spinning_top::bench::csv_field;
+using spinning_top::bench::formatted;
 
 /// Median CPU time of repeats of run(): repeats while cheap (<= ~0.3 s per point in total),
 /// so noise from other processes on the shared machine is filtered for the fast runs.
@@ -907,24 +899,6 @@ void dense_sampling(const Scene& scene, Reference& ref, const Options& opt, std:
   row.converse_attitude = converse_err.attitude;
   row.converse_cpu = converse_cpu[0];
   row.converse_peer_cpu = converse_cpu[1];
-}
-
-/// A CSV field, quoted (RFC 4180) where it holds a comma or a quote (the integrators'
-/// descriptions do).
-std::string csv_field(const std::string& text) {
-  if (text.find_first_of(",\"\n") == std::string::npos) return text;
-  std::string quoted = "\"";
-  for (const char ch : text) {
-    if (ch == '"') quoted += '"';
-    quoted += ch;
-  }
-  return quoted + "\"";
-}
-
-std::string formatted(const char* format, double value) {
-  char text[64];
-  std::snprintf(text, sizeof text, format, value);
-  return text;
 }
 
 /// Writes default_ratio.csv, default_ratio.md (the table) and default_ratio_summary.md (one
