@@ -869,7 +869,10 @@ void dense_sampling(const Scene& scene, Reference& ref, const Options& opt, std:
   // --- the converse, at equal error: the default's method loosened to the peer's best error ---
   const PeerPoint& best = sweep[choice.lo];
   const AutoPlan plan = auto_plan(base);
+  // Starts as the default itself (auto runs plan.first at these settings: the same steps, so the
+  // default's grading is the converse's until a looser decade qualifies).
   SceneConfig converse = base;
+  DenseErrors converse_err = default_err;
   if (plan.first.type != IntegratorType::kExact) {  // exact has no tolerance: its own run is the converse
     converse.integrator = plan.first;
     for (int decade = 1; decade <= 6; ++decade) {
@@ -879,12 +882,13 @@ void dense_sampling(const Scene& scene, Reference& ref, const Options& opt, std:
       const std::unique_ptr<Simulator> sim = simulator_or_null(looser);
       if (!sim) break;
       progress(scene.name + ": dense sampling, the default's method at tolerance " + number(looser.integrator.tolerance));
-      if (!(grade_ours(*sim).attitude <= best.err.attitude)) break;
+      const DenseErrors err = grade_ours(*sim);
+      if (!(err.attitude <= best.err.attitude)) break;
       converse = looser;
+      converse_err = err;
     }
   }
-  const std::unique_ptr<Simulator> converse_sim = make_simulator(converse);
-  const DenseErrors converse_err = grade_ours(*converse_sim);
+  const std::unique_ptr<Simulator> converse_sim = make_simulator(converse);  // its description
   progress(scene.name + ": dense sampling, " + converse_sim->integrator_description() + " against " + peer);
   const std::vector<double> converse_cpu = interleaved_median_cpu(
       {[&] {
