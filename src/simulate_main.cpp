@@ -408,6 +408,15 @@ OutputTarget output_target(const std::string& path) {
   return target;
 }
 
+/// Closes an output stream, throwing if a write or the close failed (a full disk shows only
+/// there); `file` is null afterwards either way.
+void close_checked(std::FILE*& file, const std::string& name) {
+  const bool write_failed = std::ferror(file) != 0;
+  const int close_status = std::fclose(file);
+  file = nullptr;
+  if (write_failed || close_status != 0) throw std::runtime_error("cannot write '" + name + "': " + std::strerror(errno));
+}
+
 /// Writes straight into a FIFO or a character device (no temporary file, no rename). Opened
 /// without O_CREAT, so a path that has meanwhile disappeared is not created as a regular file.
 class StreamOutput {
@@ -427,13 +436,7 @@ class StreamOutput {
   StreamOutput(const StreamOutput&) = delete;
   StreamOutput& operator=(const StreamOutput&) = delete;
   std::FILE* stream() { return file_; }
-  void commit() {
-    const bool write_failed = std::ferror(file_) != 0;
-    const int close_status = std::fclose(file_);
-    file_ = nullptr;
-    if (write_failed || close_status != 0)
-      throw std::runtime_error("cannot write '" + path_ + "': " + std::strerror(errno));
-  }
+  void commit() { close_checked(file_, path_); }
 
  private:
   std::string path_;
@@ -473,11 +476,7 @@ class AtomicOutputFile {
   std::FILE* stream() { return file_; }
 
   void commit() {
-    const bool write_failed = std::ferror(file_) != 0;
-    const int close_status = std::fclose(file_);
-    file_ = nullptr;
-    if (write_failed || close_status != 0)
-      throw std::runtime_error("cannot write '" + temporary_ + "': " + std::strerror(errno));
+    close_checked(file_, temporary_);
     // The destination may have changed kind since output_target() looked: rename only onto a
     // regular file or a free name.
     struct stat st {};
