@@ -37,7 +37,8 @@ class SceneSimulator final : public Simulator {
     driver_.reset(model_, 0.0, model_.initial_state());
   }
 
-  Event advance_to(double t) override { return driver_.advance_to(model_, t); }
+  using Simulator::advance_to;
+  Event advance_to(double t, const WorkBudget& budget) override { return driver_.advance_to(model_, t, budget); }
   double time() const override { return driver_.time(); }
   Event event() const override { return driver_.event(); }
 

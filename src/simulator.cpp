@@ -22,6 +22,7 @@ const char* to_string(Event event) {
     case Event::kLiftOff: return "lift_off";
     case Event::kFallen: return "fallen";
     case Event::kNonFinite: return "non_finite";
+    case Event::kEnergyDrift: return "energy_drift";
   }
   return "";
 }
@@ -184,8 +185,16 @@ namespace {
 /// the rates themselves (issue 10).
 constexpr double kMaxMotionRate = 1e6;
 
+/// The stiffest friction the core accepts, as the ratio of the slip's relaxation rate
+/// lambda = k (1/m + h^2/A) to the fastest motion (at least 1 rad/s). An implicit method's Newton
+/// systems have a condition ~ this ratio, so double precision keeps ~16 - log10(ratio) digits:
+/// with an initial slip, k = 1e12, 1e14, 1e16 N s/m on the toy top (ratios 2e11 to 2e15) gave
+/// lift-offs at 0.086, 0.035, 0.0088 s; near 1e10 the tip already sticks, and R at 1 s moves by
+/// 2e-10 (relative) from k = 1e10 to 1e11 (issue 10, doc/integrators.md "Motion rates").
+constexpr double kMaxFrictionStiffness = 1e10;
+
 /// Refuses a configuration whose fastest motion exceeds kMaxMotionRate, naming the key that
-/// drives it.
+/// drives it, and friction stiffer than kMaxFrictionStiffness.
 void validate_motion_rates(const SceneConfig& config) {
   const MotionRates rates = motion_rates(config);
   const InitialConditions& ic = config.initial;
@@ -206,6 +215,13 @@ void validate_motion_rates(const SceneConfig& config) {
       if (!(c.second <= largest->second)) largest = &c;
     refuse(largest->first, "rotation rate |omega| / 2", rates.attitude);
   }
+  const double motion = std::max(rates.fastest_oscillation(), 1.0);
+  if (!(rates.friction <= kMaxFrictionStiffness * motion))
+    throw InvalidParameter("friction", "the slip's relaxation rate k (1/m + h^2/A) = " + format_seconds(rates.friction) +
+                                           " 1/s is more than " + format_seconds(kMaxFrictionStiffness) +
+                                           " times the fastest motion (" + format_seconds(motion) +
+                                           " rad/s): beyond what double precision resolves, and the tip "
+                                           "already sticks well below it (doc/integrators.md, \"Motion rates\")");
 }
 
 }  // namespace

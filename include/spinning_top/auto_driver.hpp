@@ -64,8 +64,8 @@ class AutoDriver {
     }
   }
 
-  Event advance_to(const Model& model, double t) {
-    return visit([&](auto& driver) { return driver.advance_to(model, t); });
+  Event advance_to(const Model& model, double t, const WorkBudget& budget = WorkBudget()) {
+    return visit([&](auto& driver) { return driver.advance_to(model, t, budget); });
   }
   double time() const {
     return visit([](const auto& driver) { return driver.time(); });

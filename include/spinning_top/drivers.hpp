@@ -11,6 +11,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <string>
 #include <type_traits>
@@ -20,6 +21,7 @@
 #include "spinning_top/hot_path.hpp"
 #include "spinning_top/kinematics.hpp"
 #include "spinning_top/parameters.hpp"
+#include "spinning_top/work_budget.hpp"
 
 namespace spinning_top {
 
@@ -64,6 +66,7 @@ class FixedStepDriver : public DriverBase<Model> {
 
   void reset(const Model& model, double t, const State& y) {
     this->start(model, t, y);
+    plan_ = Plan();
     if (this->event_ != Event::kNone) return;
     State f;
     model.derivative(this->y_out_, f);
@@ -76,25 +79,38 @@ class FixedStepDriver : public DriverBase<Model> {
   const EventMonitor<Model>& event_monitor() const { return monitor_; }
 
   /// Advances to t_target in n equal substeps of at most max_step. Returns the event that
-  /// stopped the run (then time() < t_target is the event time), or kNone.
-  Event advance_to(const Model& model, double t_target) {
+  /// stopped the run (then time() < t_target is the event time), or kNone. With a budget that
+  /// runs out first it returns kNone with time() < t_target, and the next call for the same
+  /// target takes the remaining substeps of the same plan (the same states, bit for bit).
+  Event advance_to(const Model& model, double t_target, const WorkBudget& budget = WorkBudget()) {
     if (this->event_ != Event::kNone || t_target <= this->t_out_) return this->event_;
-    const double t_start = this->t_out_;
-    const double span = t_target - t_start;
-    // A request of exactly max_step arrives as t_target - t_start rounded at the size of t
-    // (relative error ~ eps t / span, 1e-9 at t = 1e4 s, 1 ms): allow substeps up to 1e-6
-    // above max_step rather than taking a second, tiny substep for rounding.
-    // The substep count, checked before the conversion: past ~9.2e18 the cast overflowed and one
-    // substep spanned the whole request (step 1e-300 s gave a lift-off with 5x the energy).
-    const double count = std::ceil(span / max_step_ * (1.0 - 1e-6));
-    if (!(count <= kMaxSubsteps))
-      throw InvalidParameter("step", "a request of " + std::to_string(span) + " s needs " + std::to_string(count) +
-                                         " substeps of " + std::to_string(max_step_) + " s, more than the " +
-                                         std::to_string(kMaxSubsteps) + " one request may take");
-    const long n = std::max(1L, static_cast<long>(count));
-    const double dt = span / static_cast<double>(n);
-    for (long i = 1; i <= n; ++i) {
-      const double t_new = (i == n) ? t_target : t_start + static_cast<double>(i) * dt;
+    if (!(plan_.target == t_target && plan_.next <= plan_.count && this->t_out_ == plan_.reached)) {
+      const double t_start = this->t_out_;
+      const double span = t_target - t_start;
+      // A request of exactly max_step arrives as t_target - t_start rounded at the size of t
+      // (relative error ~ eps t / span, 1e-9 at t = 1e4 s, 1 ms): allow substeps up to 1e-6
+      // above max_step rather than taking a second, tiny substep for rounding.
+      // The substep count, checked before the conversion: past ~9.2e18 the cast overflowed and one
+      // substep spanned the whole request (step 1e-300 s gave a lift-off with 5x the energy).
+      const double count = std::ceil(span / max_step_ * (1.0 - 1e-6));
+      if (!(count <= kMaxSubsteps))
+        throw InvalidParameter("step", "a request of " + std::to_string(span) + " s needs " + std::to_string(count) +
+                                           " substeps of " + std::to_string(max_step_) + " s, more than the " +
+                                           std::to_string(kMaxSubsteps) + " one request may take");
+      plan_.start = t_start;
+      plan_.target = t_target;
+      plan_.count = std::max(1L, static_cast<long>(count));
+      plan_.dt = span / static_cast<double>(plan_.count);
+      plan_.next = 1;
+    }
+    BudgetMeter meter(budget);
+    for (; plan_.next <= plan_.count; ++plan_.next) {
+      if (!meter.allows_step()) {
+        plan_.reached = this->t_out_;
+        return Event::kNone;
+      }
+      const long i = plan_.next;
+      const double t_new = (i == plan_.count) ? t_target : plan_.start + static_cast<double>(i) * plan_.dt;
       const State& y0 = this->y_out_;
       const double t0 = this->t_out_;
       State y_new = y0;
@@ -130,6 +146,13 @@ class FixedStepDriver : public DriverBase<Model> {
   }
   /// Substeps one request may take: 1e12 (hours of CPU), far below the count's overflow.
   static constexpr double kMaxSubsteps = 1e12;
+  /// The substeps of the request in progress: substep i ends at start + i dt (the last at
+  /// target); `next` is the first not yet taken, `reached` the time it starts from.
+  struct Plan {
+    double start = 0.0, target = -std::numeric_limits<double>::infinity(), dt = 0.0, reached = 0.0;
+    long count = 0, next = 1;
+  };
+  Plan plan_;
   double max_step_;
   Method method_;
   EventMonitor<Model> monitor_;
@@ -187,9 +210,14 @@ class AdaptiveDriver : public DriverBase<Model> {
     return buffer;
   }
 
-  Event advance_to(const Model& model, double t_target) {
+  /// Advances to t_target (dense output). With a budget that runs out first it returns kNone
+  /// with time() < t_target; the steps already taken are kept (the reported state stays at the
+  /// last answered time), so the next call goes on with the same steps, bit for bit.
+  Event advance_to(const Model& model, double t_target, const WorkBudget& budget = WorkBudget()) {
     if (this->event_ != Event::kNone || t_target <= this->t_out_) return this->event_;
+    BudgetMeter meter(budget);
     while (t_ < t_target && pending_ == Event::kNone) {
+      if (!meter.allows_step()) return Event::kNone;
       if (!take_step(model)) return this->event_ = Event::kNonFinite;
     }
     if (pending_ != Event::kNone && t_target >= t_) {
@@ -243,7 +271,10 @@ class AdaptiveDriver : public DriverBase<Model> {
   SPINNING_TOP_FLATTEN bool take_step(const Model& model) {
     typename Method::Attempt attempt;
     for (;;) {
-      if (!(dt_ > 1e-14 * std::max(1.0, std::abs(t_)))) return false;
+      // The step may shrink to what the clock resolves at t (16 ulps), however short: an absolute
+      // floor (1e-14 s) ended a stiff initial transient (a slip relaxing in 5e-14 s) in non_finite.
+      if (!(dt_ > 16.0 * std::numeric_limits<double>::epsilon() * std::abs(t_) + std::numeric_limits<double>::min()))
+        return false;
       // Step by the increment the clock can represent, (t + dt) - t, so that t_ and the state
       // advance by the same amount: otherwise t_ picks up a rounding of ~eps |t| per step that
       // the state does not, a random walk in time that a spin of 2000 rad/s turns into 1e-10 rad

@@ -12,6 +12,7 @@
 
 #include "spinning_top/hot_path.hpp"
 #include "spinning_top/kinematics.hpp"
+#include "spinning_top/parameters.hpp"
 
 // The search inside a step runs only in the few steps the screen cannot clear: kept out of line
 // so that the flattened per-step code (hot_path.hpp) does not carry it.
@@ -28,9 +29,23 @@ enum class Event {
   kLiftOff,    ///< R < 0: the floor would have to pull the tip down
   kFallen,     ///< e_Zz <= 0: the axis has reached the floor
   kNonFinite,  ///< the solution could not be continued with finite values
+  /// The integrator broke the energy balance: E + W (energy plus work against friction) moved by
+  /// more than kEnergyBalanceTolerance of its scale (EventMonitor). A numerical failure (step too
+  /// large, tolerance too loose for the motion), never physics; the run stops at the last step
+  /// that kept the balance.
+  kEnergyDrift,
 };
 
-/// "lift_off", "fallen", "non_finite", or "" for kNone (the CSV and ROS spelling).
+/// The energy balance that a step may not break: |B(t) - B(0)| <= kEnergyBalanceTolerance
+/// (|B(0)| + m g h), where B = E - C wZ^2 / 2 + W (the spin's energy C wZ^2 / 2 is a constant of
+/// the model, and would hide a drift of the motion behind a fast spin; W is the work against
+/// friction, 0 without it). A guard against garbage, not an accuracy target: the benchmark's long
+/// runs (bench/results/long_run_energy.csv: 1000 s, rk4 at step 1e-3 s and the others at their
+/// settings) stay below 2e-4 m g h, while a diverging step (rk4 at 2e-6 s on a spin of 1e6 rad/s,
+/// dop853 at tolerance 9e-5 with friction) breaks it within a few steps.
+constexpr double kEnergyBalanceTolerance = 1e-3;
+
+/// "lift_off", "fallen", "non_finite", "energy_drift", or "" for kNone (the CSV and ROS spelling).
 const char* to_string(Event event);
 
 template <class State>
@@ -246,6 +261,9 @@ class EventMonitor {
     t_ = t;
     g_ = event_functions(model, y);
     rate_ = event_rates(model, y, g_, f);
+    const TopParameters& top = model.parameters();
+    balance_ = model.energy_balance(y);
+    allowed_drift_ = kEnergyBalanceTolerance * (std::abs(balance_) + top.mass * top.gravity * top.tip_distance);
   }
 
   /// Checks the step (t_start, t_end] from y_start (the state at the last start() or check),
@@ -293,6 +311,15 @@ class EventMonitor {
                                                    const State& y_end, const State& f_end, const StateAt& state_at) {
     const Eigen::Vector2d g_end = event_functions(model, y_end);
     if (!std::isfinite(g_end[0]) || !std::isfinite(g_end[1])) return non_finite();
+    // A step that breaks the energy balance is garbage throughout (an event inside it too):
+    // the run stops at its start, the last state that kept the balance.
+    if (!(std::abs(model.energy_balance(y_end) - balance_) <= allowed_drift_)) {
+      StepOutcome outcome;
+      outcome.event = Event::kEnergyDrift;
+      outcome.time = t_;
+      outcome.state = y_start;
+      return outcome;
+    }
     const Eigen::Vector2d rate_end = event_rates(model, y_end, g_end, f_end);
     const double dt = t_end - t_;
     bool search = false, suspect[event_index::kCount];
@@ -457,6 +484,7 @@ class EventMonitor {
 
   double t_ = 0.0;
   Eigen::Vector2d g_ = Eigen::Vector2d::Zero(), rate_ = Eigen::Vector2d::Zero();  // at the step's start
+  double balance_ = 0.0, allowed_drift_ = 0.0;  // B(0) of the run and the drift it may take
   long searches_ = 0, interpolant_evaluations_ = 0;
 };
 

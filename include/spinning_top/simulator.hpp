@@ -9,6 +9,7 @@
 #include "spinning_top/kinematics.hpp"
 #include "spinning_top/model_outputs.hpp"
 #include "spinning_top/parameters.hpp"
+#include "spinning_top/work_budget.hpp"
 
 namespace spinning_top {
 
@@ -113,7 +114,11 @@ class Simulator {
 
   /// Advances the simulation to time t [s] (no-op for t <= time()). Stops early at the first
   /// validity event, which it returns (then time() is the event time); kNone otherwise.
-  virtual Event advance_to(double t) = 0;
+  Event advance_to(double t) { return advance_to(t, WorkBudget::unlimited()); }
+  /// The same within a work budget (work_budget.hpp): if it runs out first, returns kNone with
+  /// time() < t and snapshot() still at time(); call again with the same t to go on. The states
+  /// reached are those of an unbounded call, bit for bit, wherever the budget ran out.
+  virtual Event advance_to(double t, const WorkBudget& budget) = 0;
   virtual double time() const = 0;
   /// The event that ended the run, or kNone while it goes on.
   virtual Event event() const = 0;

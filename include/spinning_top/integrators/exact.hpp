@@ -980,7 +980,8 @@ class ExactDriver : public DriverBase<Model> {
   int interpolation_pieces() const { return table_.pieces(); }
   int built_interpolation_pieces() const { return table_.built_pieces(); }
 
-  Event advance_to(const Model& /*model*/, double t_target) {
+  /// One evaluation per request, so a budget (work_budget.hpp) never runs out here.
+  Event advance_to(const Model& /*model*/, double t_target, const WorkBudget& /*budget*/ = WorkBudget()) {
     if (this->event_ != Event::kNone || t_target <= this->t_out_) return this->event_;
     if (pending_ != Event::kNone && t_target >= event_time_) {
       this->t_out_ = event_time_;

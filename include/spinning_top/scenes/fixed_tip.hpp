@@ -120,13 +120,21 @@ class FixedTip {
     out.center_of_mass = h * (q * Vector3::UnitZ());
     out.center_of_mass_velocity = h * (q * Vector3(wy, -wx, 0.0));  // v_G = h w x e_Z
     out.contact_point = Vector3::Zero();
-    // E = 1/2 A0 w_perp^2 + 1/2 C wZ^2 + m g h e_Zz (|v_G|^2 = h^2 w_perp^2 folded into A0).
-    out.energy = 0.5 * a0 * (wx * wx + wy * wy) + 0.5 * c * spin_ * spin_ +
-                 parameters_.mass * parameters_.gravity * h * gamma.z();
+    out.energy = energy_without_spin(y) + 0.5 * c * spin_ * spin_;
     // L_z about the pivot: L = (A0 wX, A0 wY, C wZ) in body components, projected on e_z.
     out.vertical_angular_momentum = a0 * (wx * gamma.x() + wy * gamma.y()) + c * spin_ * gamma.z();
     return out;
   }
+
+  /// E - C wZ^2 / 2 = 1/2 A0 w_perp^2 + m g h e_Zz (|v_G|^2 = h^2 w_perp^2 folded into A0): the
+  /// part of the energy that moves (C wZ^2 / 2 is a constant of the model).
+  double energy_without_spin(const State& y) const {
+    const double wx = y[state_index::kOmegaX], wy = y[state_index::kOmegaY];
+    return 0.5 * parameters_.inertia_about_tip() * (wx * wx + wy * wy) +
+           parameters_.mass * parameters_.gravity * parameters_.tip_distance * vertical_in_body(y).z();
+  }
+  /// What the energy balance watches (EventMonitor): E - C wZ^2 / 2, conserved.
+  double energy_balance(const State& y) const { return energy_without_spin(y); }
 
   const TopParameters& parameters() const { return parameters_; }
   const InitialConditions& initial_conditions() const { return initial_; }

@@ -59,7 +59,7 @@ class Frictionless {
     const Vector3 gamma = vertical_in_body(y);
     const Vector3 axis = q * Vector3::UnitZ();
     const double wx = y[state_index::kOmegaX], wy = y[state_index::kOmegaY];
-    const double h = parameters_.tip_distance, m = parameters_.mass;
+    const double h = parameters_.tip_distance;
     const double a = parameters_.inertia_transverse, c = parameters_.inertia_axial;
     const double vz = constrained_vertical_velocity(h, gamma, wx, wy);
     ModelOutputs out;
@@ -67,12 +67,24 @@ class Frictionless {
     out.center_of_mass = Vector3(center_of_mass_xy_.x(), center_of_mass_xy_.y(), h * gamma.z());
     out.center_of_mass_velocity = Vector3(0.0, 0.0, vz);
     out.contact_point = Vector3(center_of_mass_xy_.x() - h * axis.x(), center_of_mass_xy_.y() - h * axis.y(), 0.0);
-    out.energy = 0.5 * m * vz * vz + 0.5 * (a * (wx * wx + wy * wy) + c * spin_ * spin_) +
-                 m * parameters_.gravity * h * gamma.z();
+    out.energy = energy_without_spin(y) + 0.5 * c * spin_ * spin_;
     // L_z about the vertical through G: L_G = (A wX, A wY, C wZ) in body components.
     out.vertical_angular_momentum = a * (wx * gamma.x() + wy * gamma.y()) + c * spin_ * gamma.z();
     return out;
   }
+
+  /// E - C wZ^2 / 2 = 1/2 m vz_G^2 + 1/2 A w_perp^2 + m g z_G: the part of the energy that moves
+  /// (C wZ^2 / 2 is a constant of the model).
+  double energy_without_spin(const State& y) const {
+    const Vector3 gamma = vertical_in_body(y);
+    const double wx = y[state_index::kOmegaX], wy = y[state_index::kOmegaY];
+    const double h = parameters_.tip_distance, m = parameters_.mass;
+    const double vz = constrained_vertical_velocity(h, gamma, wx, wy);
+    return 0.5 * m * vz * vz + 0.5 * parameters_.inertia_transverse * (wx * wx + wy * wy) +
+           m * parameters_.gravity * h * gamma.z();
+  }
+  /// What the energy balance watches (EventMonitor): E - C wZ^2 / 2, conserved.
+  double energy_balance(const State& y) const { return energy_without_spin(y); }
 
   const TopParameters& parameters() const { return parameters_; }
   const InitialConditions& initial_conditions() const { return initial_; }

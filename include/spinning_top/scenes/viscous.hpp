@@ -55,7 +55,7 @@ class Viscous {
     const Evaluation e = evaluate(y);
     const Vector3 gamma = vertical_in_body(y);
     const double wx = y[state_index::kOmegaX], wy = y[state_index::kOmegaY];
-    const double h = parameters_.tip_distance, m = parameters_.mass;
+    const double h = parameters_.tip_distance;
     const double a = parameters_.inertia_transverse, c = parameters_.inertia_axial;
     const Vector3 velocity(y[kVx], y[kVy], constrained_vertical_velocity(h, gamma, wx, wy));
     ModelOutputs out;
@@ -64,12 +64,24 @@ class Viscous {
     out.center_of_mass = Vector3(y[kX], y[kY], h * gamma.z());
     out.center_of_mass_velocity = velocity;
     out.contact_point = Vector3(y[kX] - h * e.axis.x(), y[kY] - h * e.axis.y(), 0.0);
-    out.energy = 0.5 * m * velocity.squaredNorm() + 0.5 * (a * (wx * wx + wy * wy) + c * spin_ * spin_) +
-                 m * parameters_.gravity * h * gamma.z();
+    out.energy = energy_without_spin(y) + 0.5 * c * spin_ * spin_;
     out.vertical_angular_momentum = a * (wx * gamma.x() + wy * gamma.y()) + c * spin_ * gamma.z();
     out.dissipated_energy = y[kWork];
     return out;
   }
+
+  /// E - C wZ^2 / 2 = 1/2 m |v_G|^2 + 1/2 A w_perp^2 + m g z_G: the part of the energy that moves
+  /// (friction acts at the tip, on the axis, so it leaves wZ and C wZ^2 / 2 constant).
+  double energy_without_spin(const State& y) const {
+    const Vector3 gamma = vertical_in_body(y);
+    const double wx = y[state_index::kOmegaX], wy = y[state_index::kOmegaY];
+    const double h = parameters_.tip_distance, m = parameters_.mass;
+    const Vector3 velocity(y[kVx], y[kVy], constrained_vertical_velocity(h, gamma, wx, wy));
+    return 0.5 * m * velocity.squaredNorm() + 0.5 * parameters_.inertia_transverse * (wx * wx + wy * wy) +
+           m * parameters_.gravity * h * gamma.z();
+  }
+  /// What the energy balance watches (EventMonitor): E - C wZ^2 / 2 + W, conserved (W' = k |v_P|^2).
+  double energy_balance(const State& y) const { return energy_without_spin(y) + y[kWork]; }
 
   const TopParameters& parameters() const { return parameters_; }
   const InitialConditions& initial_conditions() const { return initial_; }

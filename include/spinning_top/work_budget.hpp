@@ -1,0 +1,53 @@
+// A bound on the work of one advance_to() call, so that a front end stays responsive whatever
+// the physics asks (a node's timer callback, a batch run's CPU): at most max_steps integration
+// steps, and no step begun after the deadline. An advance that runs out returns with no event
+// and time() short of its target; calling it again with the same target continues exactly where
+// it stopped, so results never depend on where (or whether) a budget ran out.
+#pragma once
+
+#include <chrono>
+#include <limits>
+
+namespace spinning_top {
+
+struct WorkBudget {
+  using Clock = std::chrono::steady_clock;
+
+  long max_steps = std::numeric_limits<long>::max();  ///< steps (substeps, attempts included) per call
+  Clock::time_point deadline = Clock::time_point::max();
+
+  static WorkBudget unlimited() { return WorkBudget(); }
+  static WorkBudget steps(long n) {
+    WorkBudget budget;
+    budget.max_steps = n;
+    return budget;
+  }
+  static WorkBudget until(Clock::time_point deadline) {
+    WorkBudget budget;
+    budget.deadline = deadline;
+    return budget;
+  }
+  bool has_deadline() const { return deadline != Clock::time_point::max(); }
+};
+
+/// Counts a call's steps against its budget. The clock is read every 16 steps only (a read costs
+/// about as much as a cheap step), so a deadline is overrun by at most 16 steps.
+class BudgetMeter {
+ public:
+  explicit BudgetMeter(const WorkBudget& budget) : budget_(budget) {}
+  /// True if one more step may start.
+  bool allows_step() {
+    if (taken_ >= budget_.max_steps) return false;
+    if (budget_.has_deadline() && (taken_ & 15) == 0 && taken_ > 0 && WorkBudget::Clock::now() >= budget_.deadline)
+      return false;
+    ++taken_;
+    return true;
+  }
+  long taken() const { return taken_; }
+
+ private:
+  const WorkBudget& budget_;
+  long taken_ = 0;
+};
+
+}  // namespace spinning_top
