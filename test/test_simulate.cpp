@@ -516,6 +516,38 @@ TEST_F(SimulateTest, UnwritableOutputIsARuntimeErrorWithCode1) {
   EXPECT_FALSE(exists(csv));
 }
 
+// A run that needs more integration steps than --max-steps stops with exit code 3 and says
+// so, instead of computing for hours (rk4 at step 1e-9 s over 1000 s: 1e12 substeps). The rows
+// up to there stream to stdout; a file output is not created. Within the budget, the rows are
+// those of a run without one.
+TEST_F(SimulateTest, ARunBeyondMaxStepsStopsWithCode3) {
+  const std::vector<std::string> tiny_step = {"--config", kFixedTipYaml, "--set", "integrator=rk4",
+                                              "--set", "step=1e-7", "--output-rate", "100"};
+  auto with = [&](std::vector<std::string> more) {
+    std::vector<std::string> args = tiny_step;
+    args.insert(args.end(), more.begin(), more.end());
+    return args;
+  };
+  const Result r = simulate(with({"--duration", "1000", "--max-steps", "200000"}));
+  EXPECT_EQ(r.exit_code, 3) << r.err;
+  EXPECT_NE(r.err.find("--max-steps 200000"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("rk4, step 1e-07 s"), std::string::npos) << r.err;
+  const std::vector<Row> rows = parse_csv(r.out);
+  ASSERT_EQ(rows.size(), 3u);  // 200000 substeps of 1e-7 s: t = 0, 0.01, 0.02 s
+  const Result full = simulate(with({"--duration", "0.02"}));
+  ASSERT_EQ(full.exit_code, 0) << full.err;
+  EXPECT_EQ(r.out, full.out);
+  const std::string csv = output_dir_ + "/run.csv";
+  const Result to_file = simulate(with({"--duration", "1000", "--max-steps", "1000", "--output", csv}));
+  EXPECT_EQ(to_file.exit_code, 3) << to_file.err;
+  EXPECT_TRUE(directory_entries(output_dir_).empty());
+  for (const std::string bad : {"0", "1.5", "-3", "nan", "1e16"}) {
+    const Result refused = simulate(with({"--max-steps", bad}));
+    EXPECT_EQ(refused.exit_code, 2) << bad;
+    EXPECT_NE(refused.err.find("--max-steps"), std::string::npos) << refused.err;
+  }
+}
+
 TEST_F(SimulateTest, HelpDocumentsEveryKeyWithUnitDefaultAndRequirement) {
   const Result r = simulate({"--help"});
   ASSERT_EQ(r.exit_code, 0) << r.err;
