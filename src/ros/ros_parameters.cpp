@@ -34,6 +34,19 @@ bool is_number(const char* text) {
   return end != text && *end == '\0';
 }
 
+/// For a string that reads as a number: why it is a string. YAML 1.1 (rosparam, roslaunch's
+/// <rosparam>) takes 1e-8 without a dot for text, so `step: 1e-8` arrives as "1e-8".
+std::string numeric_text_hint(const XmlRpc::XmlRpcValue& value) {
+  if (value.getType() != XmlRpc::XmlRpcValue::TypeString) return "";
+  const std::string text = static_cast<std::string>(const_cast<XmlRpc::XmlRpcValue&>(value));
+  if (!is_number(text.c_str())) return "";
+  std::string hint = "; '" + text + "' is text";
+  if (text.find_first_of("eE") != std::string::npos && text.find('.') == std::string::npos)
+    hint += " because YAML 1.1 (rosparam) reads an exponent without a dot as a string: write it with a dot, "
+            "e.g. 1.0e-8";
+  return hint;
+}
+
 }  // namespace
 
 ParameterMap read_scene_parameters(const ros::NodeHandle& private_nh) {
@@ -69,7 +82,8 @@ ParameterMap read_scene_parameters(const ros::NodeHandle& private_nh) {
         break;
     }
     throw InvalidParameter(spec.key, std::string("is ") + type_name(value.getType()) + ", expected " +
-                                         (is_text ? "a string" : "a number") + " (" + spec.description + ")");
+                                         (is_text ? "a string" : "a number") + " (" + spec.description + ")" +
+                                         (is_text ? "" : numeric_text_hint(value)));
   }
   return values;
 }
@@ -79,7 +93,8 @@ double read_number(const ros::NodeHandle& private_nh, const std::string& key, do
   if (!private_nh.getParam(key, value)) return default_value;
   if (value.getType() == XmlRpc::XmlRpcValue::TypeDouble) return static_cast<double>(value);
   if (value.getType() == XmlRpc::XmlRpcValue::TypeInt) return static_cast<int>(value);
-  throw InvalidParameter(key, std::string("is ") + type_name(value.getType()) + ", expected a number");
+  throw InvalidParameter(key, std::string("is ") + type_name(value.getType()) + ", expected a number" +
+                                  numeric_text_hint(value));
 }
 
 std::string read_string(const ros::NodeHandle& private_nh, const std::string& key,

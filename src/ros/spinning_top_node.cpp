@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <chrono>
 #include <cstdio>
 
 #include "spinning_top/ros/ros_parameters.hpp"
@@ -20,9 +21,12 @@ namespace {
 
 constexpr double kMaxRate = 100000.0;  // [Hz] beyond this the tick cost alone exceeds the period
 constexpr double kAsFastAsPossibleSlice = 1e-3;  // [s] wall time per timer callback when rtf = 0
+// Beyond it the timer period 1 / (rate x factor) falls below 0.1 us at 1 kHz: "as fast as
+// possible" is 0, and a huge finite factor (1e300) asked for a period of 1e-303 s.
+constexpr double kMaxRealTimeFactor = 1e4;
 
 std::string format(const char* pattern, double value) {
-  char buffer[64];
+  char buffer[160];
   std::snprintf(buffer, sizeof buffer, pattern, value);
   return buffer;
 }
@@ -92,7 +96,7 @@ BodyShape body_shape(const TopParameters& top) {
 /// fatal, since other tools may store things there.
 void warn_about_unknown_keys(const ros::NodeHandle& private_nh) {
   static const char* const node_keys[] = {
-      "rate", "real_time_factor", "publish_clock", "start_paused", "world_frame", "body_frame",
+      "rate", "real_time_factor", "tick_budget", "publish_clock", "start_paused", "world_frame", "body_frame",
       "contact_frame", "marker_rate", "trace_length", "trace_resolution", "force_scale",
       "energy_drift_warning", "energy_drift_error", "quaternion_norm_error", "constraint_error"};
   std::vector<std::string> names;
@@ -123,8 +127,12 @@ NodeSettings read_node_settings(const ros::NodeHandle& nh) {
   require(std::isfinite(s.rate) && s.rate > 0.0 && s.rate <= kMaxRate, "rate",
           format("must lie in (0, %g] Hz", kMaxRate));
   s.real_time_factor = read_number(nh, "real_time_factor", s.real_time_factor);
-  require(std::isfinite(s.real_time_factor) && s.real_time_factor >= 0.0, "real_time_factor",
-          "must be finite and >= 0 (0 = as fast as possible)");
+  require(std::isfinite(s.real_time_factor) && s.real_time_factor >= 0.0 && s.real_time_factor <= kMaxRealTimeFactor,
+          "real_time_factor", format("must lie in [0, %g] (0 = as fast as possible)", kMaxRealTimeFactor));
+  s.tick_budget = read_number(nh, "tick_budget", s.tick_budget);
+  require(std::isfinite(s.tick_budget) && s.tick_budget >= 1e-4 && s.tick_budget <= 1.0, "tick_budget",
+          "must lie in [1e-4, 1] s (the wall time one callback may integrate before the node serves "
+          "services, parameter updates and SIGINT again)");
   s.publish_clock = read_bool(nh, "publish_clock", s.publish_clock);
   s.start_paused = read_bool(nh, "start_paused", s.start_paused);
   s.world_frame = read_string(nh, "world_frame", s.world_frame);
@@ -227,15 +235,17 @@ void SpinningTopNode::on_timer(const ros::WallTimerEvent& event) {
     // As fast as possible: ticks back to back for one slice, then back to the callback
     // queue so that services and dynamic_reconfigure are served.
     const ros::WallTime start = ros::WallTime::now();
+    const ros::WallTime deadline = start + ros::WallDuration(std::min(kAsFastAsPossibleSlice, settings_.tick_budget));
     ros::WallTime now = start;
-    while (!paused_ && (now - start).toSec() < kAsFastAsPossibleSlice) {
-      tick();
+    while (!paused_ && now < deadline) {
+      const bool finished = tick(deadline);
       const ros::WallTime end = ros::WallTime::now();
       const double cost = (end - now).toSec();
       tick_cost_sum_ += cost;
       tick_cost_max_ = std::max(tick_cost_max_, cost);
-      ++ticks_in_window_;
       now = end;
+      if (!finished) break;
+      ++ticks_in_window_;
     }
     return;
   }
@@ -245,32 +255,54 @@ void SpinningTopNode::on_timer(const ros::WallTimerEvent& event) {
   const double period = 1.0 / (settings_.rate * settings_.real_time_factor);
   if ((event.current_real - event.current_expected).toSec() > period) ++overruns_;
   const ros::WallTime start = ros::WallTime::now();
-  tick();
+  const bool finished = tick(start + ros::WallDuration(settings_.tick_budget));
   const double cost = (ros::WallTime::now() - start).toSec();
   tick_cost_sum_ += cost;
   tick_cost_max_ = std::max(tick_cost_max_, cost);
-  ++ticks_in_window_;
+  if (finished) ++ticks_in_window_;
 }
 
-void SpinningTopNode::tick() {
-  ++ticks_since_anchor_;
-  ++tick_count_;
-  const double previous_target = target_time_;
-  target_time_ = anchor_time_ + static_cast<double>(ticks_since_anchor_) / settings_.rate;
-  sim_time_in_window_ += target_time_ - previous_target;
+WorkBudget SpinningTopNode::budget_until(ros::WallTime deadline) {
+  const double remaining = std::max(0.0, (deadline - ros::WallTime::now()).toSec());
+  return WorkBudget::until(WorkBudget::Clock::now() +
+                           std::chrono::duration_cast<WorkBudget::Clock::duration>(std::chrono::duration<double>(remaining)));
+}
+
+bool SpinningTopNode::tick(ros::WallTime deadline) {
+  if (!tick_unfinished_) {
+    ++ticks_since_anchor_;
+    ++tick_count_;
+    const double previous_target = target_time_;
+    target_time_ = anchor_time_ + static_cast<double>(ticks_since_anchor_) / settings_.rate;
+    sim_time_in_window_ += target_time_ - previous_target;
+  }
   if (simulator_->event() == Event::kNone) {
-    const Event event = simulator_->advance_to(target_time_);
+    const Event event = simulator_->advance_to(target_time_, budget_until(deadline));
+    tick_unfinished_ = event == Event::kNone && simulator_->time() < target_time_;
+    if (tick_unfinished_) {
+      // Out of budget: the physics needs more work per tick than the budget allows (a tiny
+      // step, a very fast motion). Back to the callback queue (services, parameter updates and
+      // SIGINT are served); the next callback goes on with the same tick.
+      ++budget_exhaustions_;
+      ROS_ERROR_THROTTLE(5.0,
+                         "spinning_top: a tick needs more than its %g s work budget (~tick_budget): at t = %.9g s "
+                         "of %.9g s, %s; the simulation runs slower than requested",
+                         settings_.tick_budget, simulator_->time(), target_time_,
+                         simulator_->integrator_description().c_str());
+      return false;
+    }
     if (event != Event::kNone) handle_event(event);
   }
   const ros::Time stamp = stamp_origin_ + ros::Duration(target_time_);
-  if (stamp <= last_stamp_) return;  // never twice the same stamp (tf2 TF_REPEATED_DATA)
+  if (stamp <= last_stamp_) return true;  // never twice the same stamp (tf2 TF_REPEATED_DATA)
   last_stamp_ = stamp;
   const Snapshot snapshot = simulator_->snapshot();
   if (!finite(snapshot)) {  // the core promises this never happens; never pass it on
     ROS_ERROR_ONCE("spinning_top: non-finite state at t = %.9g s not published", snapshot.time);
-    return;
+    return true;
   }
   publish(snapshot, stamp);
+  return true;
 }
 
 void SpinningTopNode::publish(const Snapshot& s, const ros::Time& stamp) {
@@ -447,10 +479,14 @@ void SpinningTopNode::diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat
   const double achieved_rtf = wall > 0.0 ? sim_time_in_window_ / wall : 0.0;
   const double mean_cost = ticks_in_window_ > 0 ? tick_cost_sum_ / ticks_in_window_ : 0.0;
   const long overruns_in_window = overruns_ - overruns_at_window_start_;
+  const long exhaustions_in_window = budget_exhaustions_ - budget_exhaustions_at_window_start_;
 
   status.summary(DiagnosticStatus::OK, paused_ ? "paused" : "running");
   if (overruns_in_window > 0)
     status.mergeSummaryf(DiagnosticStatus::WARN, "%ld overruns in the last %.1f s", overruns_in_window, wall);
+  if (exhaustions_in_window > 0)
+    status.mergeSummaryf(DiagnosticStatus::ERROR, "ticks ran out of their %g s work budget %ld times in the last %.1f s",
+                         settings_.tick_budget, exhaustions_in_window, wall);
   if (std::abs(drift) > settings_.energy_drift_error)
     status.mergeSummaryf(DiagnosticStatus::ERROR, "energy drift %.3g", drift);
   else if (std::abs(drift) > settings_.energy_drift_warning)
@@ -483,6 +519,9 @@ void SpinningTopNode::diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat
   status.addf("achieved real-time factor", "%.3f", achieved_rtf);
   status.add("overruns (total)", overruns_);
   status.add("overruns (window)", overruns_in_window);
+  status.addf("tick budget [s]", "%g", settings_.tick_budget);
+  status.add("ticks out of budget (total)", budget_exhaustions_);
+  status.add("ticks out of budget (window)", exhaustions_in_window);
   status.addf("tick cost mean [us]", "%.1f", 1e6 * mean_cost);
   status.addf("tick cost max [us]", "%.1f", 1e6 * tick_cost_max_);
   status.add("ticks (window)", ticks_in_window_);
@@ -492,6 +531,7 @@ void SpinningTopNode::diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat
   ticks_in_window_ = 0;
   tick_cost_sum_ = tick_cost_max_ = 0.0;
   overruns_at_window_start_ = overruns_;
+  budget_exhaustions_at_window_start_ = budget_exhaustions_;
 }
 
 void SpinningTopNode::reconfigure(SpinningTopConfig& config, uint32_t /*level*/) {
@@ -504,8 +544,9 @@ void SpinningTopNode::reconfigure(SpinningTopConfig& config, uint32_t /*level*/)
   };
   if (!(std::isfinite(config.rate) && config.rate > 0.0 && config.rate <= kMaxRate))
     return refuse(format("rate: must lie in (0, %g] Hz", kMaxRate));
-  if (!(std::isfinite(config.real_time_factor) && config.real_time_factor >= 0.0))
-    return refuse("real_time_factor: must be finite and >= 0 (0 = as fast as possible)");
+  if (!(std::isfinite(config.real_time_factor) && config.real_time_factor >= 0.0 &&
+        config.real_time_factor <= kMaxRealTimeFactor))
+    return refuse(format("real_time_factor: must lie in [0, %g] (0 = as fast as possible)", kMaxRealTimeFactor));
 
   TopParameters top = simulator_->config().top;
   IntegratorSettings integrator = simulator_->config().integrator;
@@ -552,6 +593,7 @@ bool SpinningTopNode::on_reset(std_srvs::Trigger::Request&, std_srvs::Trigger::R
   stamp_origin_ = last_stamp_;
   anchor_time_ = target_time_ = 0.0;
   ticks_since_anchor_ = 0;
+  tick_unfinished_ = false;
   trace_.clear();
   if (reported_event_ != Event::kNone) {
     std_msgs::String cleared;  // "": no event (the core's spelling of none)
@@ -586,7 +628,13 @@ bool SpinningTopNode::on_step(std_srvs::Trigger::Request&, std_srvs::Trigger::Re
     response.message = "~step advances one tick while paused: call ~pause first";
     return true;
   }
-  tick();
+  if (!tick(ros::WallTime::now() + ros::WallDuration(settings_.tick_budget))) {
+    response.success = false;
+    response.message = format("the tick needs more than its ~tick_budget of %g s", settings_.tick_budget) +
+                       format(": integrated to t = %.9g s", simulator_->time()) +
+                       format(" of %.9g s; call ~step again to go on", target_time_);
+    return true;
+  }
   response.success = true;
   response.message = format("stepped to t = %.9g s", target_time_);
   return true;

@@ -77,6 +77,22 @@ TEST(NodeBadParameter, GravityGivenAsAString) {
   expect_refused("bad_gravity_text", "", "gravity");
   ros::param::del("/bad_gravity_text/gravity");
 }
+// YAML 1.1 (`rosparam load`, `rosparam set`, a launch file's <rosparam>) reads an exponent
+// without a dot (`step: 1e-5`) as text: refused, and the message says why and how to write it.
+TEST(NodeBadParameter, ExponentWithoutADotIsTextAndTheMessageSaysSo) {
+  ros::param::set("/bad_step_text/step", std::string("1e-5"));
+  const Outcome outcome = run_node("bad_step_text", "_integrator:=rk4");
+  ros::param::del("/bad_step_text/step");
+  EXPECT_NE(outcome.exit_code, 0);
+  EXPECT_NE(outcome.output.find("invalid parameter ~step "), std::string::npos) << outcome.output;
+  EXPECT_NE(outcome.output.find("write it with a dot, e.g. 1.0e-8"), std::string::npos) << outcome.output;
+}
+// The real-time factor is bounded: 1e300 asked the timer for a period of 1e-303 s.
+TEST(NodeBadParameter, HugeRealTimeFactor) {
+  expect_refused("bad_rtf_huge", "_real_time_factor:=1.0e+300", "real_time_factor");
+}
+// The work budget of one callback must leave the node responsive.
+TEST(NodeBadParameter, TickBudgetOutsideItsRange) { expect_refused("bad_budget", "_tick_budget:=5.0", "tick_budget"); }
 
 // The control: the same binary with valid parameters runs (and publishes) until stopped.
 TEST(NodeBadParameter, ValidParametersKeepTheNodeRunning) {

@@ -28,6 +28,9 @@ struct NodeSettings {
   std::string world_frame = "world";
   std::string body_frame = "top";
   std::string contact_frame = "contact";
+  /// [s] wall time one timer callback (or ~step) may integrate; a tick that needs more goes on
+  /// in the next callback, and diagnostics report it (ERROR)
+  double tick_budget = 0.05;
   double marker_rate = 30.0;        ///< markers per simulated second [Hz]
   int trace_length = 2000;          ///< points kept in the tip's trace
   double trace_resolution = 1e-4;   ///< [m] the trace gets a point when the tip moved this far
@@ -51,8 +54,12 @@ class SpinningTopNode {
   void on_timer(const ros::WallTimerEvent& event);
   void on_diagnostics_timer(const ros::WallTimerEvent&);
   /// Advances exactly 1/rate of simulated time and publishes; the stamp moves on even
-  /// after an event (the frozen pose is republished with fresh stamps).
-  void tick();
+  /// after an event (the frozen pose is republished with fresh stamps). The integration stops
+  /// at `deadline`: then the tick is unfinished (false, nothing published) and the next call
+  /// goes on with it, so the published samples do not depend on where it stopped.
+  bool tick(ros::WallTime deadline);
+  /// The core's budget for a wall-time deadline.
+  static WorkBudget budget_until(ros::WallTime deadline);
   void publish(const Snapshot& snapshot, const ros::Time& stamp);
   void publish_markers(const Snapshot& snapshot, const ros::Time& stamp);
   void handle_event(Event event);
@@ -81,6 +88,7 @@ class SpinningTopNode {
   bool paused_ = false;
   long ticks_per_marker_ = 1;
   long tick_count_ = 0;
+  bool tick_unfinished_ = false;  // the current tick ran out of its budget; the next call goes on
 
   // Energy balance E + W - E0 (W: work against friction), rebaselined on reset and on
   // live parameter changes (a new g changes E by m (g' - g) z_G).
@@ -93,6 +101,8 @@ class SpinningTopNode {
   // Pacing and cost, reported in diagnostics.
   long overruns_ = 0;
   long overruns_at_window_start_ = 0;
+  long budget_exhaustions_ = 0;  // callbacks that ended with the tick unfinished
+  long budget_exhaustions_at_window_start_ = 0;
   double sim_time_in_window_ = 0.0;  // [s] simulated
   long ticks_in_window_ = 0;
   double tick_cost_sum_ = 0.0, tick_cost_max_ = 0.0;  // [s] wall

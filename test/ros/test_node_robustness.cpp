@@ -1,0 +1,220 @@
+// rostest (test/node_robustness.test), issue 10: the node stays responsive and publishes nothing
+// wrong whatever it is asked.
+//   /slow: rk4 at step 1e-8 s (1e5 substeps per 1 ms tick, ~50 ms of work) with a 0.01 s
+//     ~tick_budget: diagnostics say ERROR naming the budget, ~pause answers, stamps keep
+//     increasing one tick at a time, nothing non-finite.
+//   /steady: the default viscous scene: dynamic_reconfigure with NaN, inf and huge values and
+//     malformed service calls are refused or rejected, the node goes on publishing finite states.
+//   A node started by the test on the same overloaded physics exits promptly on SIGINT.
+// The wall bounds here are hang guards (100x what the budget allows), not speed assertions.
+#include <diagnostic_msgs/DiagnosticArray.h>
+#include <dynamic_reconfigure/DoubleParameter.h>
+#include <dynamic_reconfigure/IntParameter.h>
+#include <dynamic_reconfigure/Reconfigure.h>
+#include <geometry_msgs/PointStamped.h>
+#include <geometry_msgs/WrenchStamped.h>
+#include <gtest/gtest.h>
+#include <ros/ros.h>
+#include <signal.h>
+#include <std_msgs/String.h>
+#include <std_srvs/Empty.h>
+#include <std_srvs/SetBool.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "node_test_helpers.hpp"
+
+using node_test::Recorder;
+using node_test::trigger;
+using node_test::wait_for;
+
+namespace {
+
+bool finite(const geometry_msgs::WrenchStamped& w) {
+  return std::isfinite(w.wrench.force.x) && std::isfinite(w.wrench.force.y) && std::isfinite(w.wrench.force.z);
+}
+
+/// Sets one double of `node` through dynamic_reconfigure; returns the value the node reports
+/// back as its configuration (the previous one when it refuses).
+double reconfigure(const std::string& node, const std::string& name, double value) {
+  EXPECT_TRUE(ros::service::waitForService(node + "/set_parameters", ros::Duration(10.0)));
+  dynamic_reconfigure::Reconfigure srv;
+  dynamic_reconfigure::DoubleParameter parameter;
+  parameter.name = name;
+  parameter.value = value;
+  srv.request.config.doubles.push_back(parameter);
+  EXPECT_TRUE(ros::service::call(node + "/set_parameters", srv)) << name << " = " << value;
+  for (const auto& d : srv.response.config.doubles)
+    if (d.name == name) return d.value;
+  ADD_FAILURE() << name << " missing from the reconfigure response";
+  return NAN;
+}
+
+/// The latest status of `node`'s simulation in /diagnostics.
+struct LatestStatus {
+  explicit LatestStatus(ros::NodeHandle& nh, const std::string& node)
+      : recorder(nh, "/diagnostics"), name(node + ": simulation") {}
+  bool find(diagnostic_msgs::DiagnosticStatus& out) const {
+    const auto arrays = recorder.messages();
+    for (auto a = arrays.rbegin(); a != arrays.rend(); ++a)
+      for (const auto& status : a->status)
+        if (status.name == name) {
+          out = status;
+          return true;
+        }
+    return false;
+  }
+  std::string names() const {
+    std::string all;
+    for (const auto& a : recorder.messages())
+      for (const auto& status : a.status)
+        if (all.find(status.name) == std::string::npos) all += status.name + "; ";
+    return all;
+  }
+  Recorder<diagnostic_msgs::DiagnosticArray> recorder;
+  std::string name;
+};
+
+}  // namespace
+
+TEST(NodeRobustness, ATickBeyondItsBudgetIsReportedAndServicesStayResponsive) {
+  ros::NodeHandle nh;
+  Recorder<geometry_msgs::WrenchStamped> forces(nh, "/slow/normal_force");
+  LatestStatus diagnostics(nh, "slow");
+  diagnostic_msgs::DiagnosticStatus status;
+  ASSERT_TRUE(wait_for(
+      [&] {
+        return diagnostics.find(status) && status.level == diagnostic_msgs::DiagnosticStatus::ERROR &&
+               status.message.find("work budget") != std::string::npos;
+      },
+      20.0))
+      << "no ERROR naming the work budget; last: " << status.message << " (" << diagnostics.recorder.size()
+      << " diagnostics messages, names: " << diagnostics.names() << ")";
+  std::string exhausted;
+  for (const auto& kv : status.values)
+    if (kv.key == "ticks out of budget (total)") exhausted = kv.value;
+  EXPECT_FALSE(exhausted.empty() || exhausted == "0") << exhausted;
+
+  // A service call is served between two slices of the same tick.
+  const ros::WallTime before = ros::WallTime::now();
+  const std_srvs::Trigger::Response paused = trigger("/slow/pause");
+  const double pause_wall = (ros::WallTime::now() - before).toSec();
+  EXPECT_TRUE(paused.success) << paused.message;
+  EXPECT_LT(pause_wall, 1.0) << "~pause took " << pause_wall << " s with a 0.01 s tick budget";
+  std::printf("[ measured ] ~pause answered in %.3f s (tick budget 0.01 s, a tick ~0.05 s of work)\n", pause_wall);
+  // ~step while a tick needs more than the budget: success false until the tick is done, then
+  // true; never a hang.
+  int calls = 0;
+  bool stepped = false;
+  while (!stepped && calls < 100) {
+    stepped = trigger("/slow/step").success;
+    ++calls;
+  }
+  EXPECT_TRUE(stepped) << "100 ~step calls did not finish one tick";
+  EXPECT_TRUE(trigger("/slow/resume").success);
+  ASSERT_TRUE(wait_for([&] { return forces.size() > 20; }, 20.0)) << forces.size();
+
+  // What was published: one tick apart (1 ms), finite.
+  const auto messages = forces.messages();
+  for (std::size_t i = 1; i < messages.size(); ++i) {
+    const double dt = (messages[i].header.stamp - messages[i - 1].header.stamp).toSec();
+    EXPECT_NEAR(dt, 1e-3, 2e-9) << "sample " << i;
+    EXPECT_TRUE(finite(messages[i]));
+  }
+}
+
+TEST(NodeRobustness, SigintEndsAnOverloadedNodePromptly) {
+  ros::NodeHandle nh;
+  Recorder<geometry_msgs::PointStamped> points(nh, "/overloaded/contact_point");
+  const pid_t pid = fork();
+  if (pid == 0) {
+    execl(SPINNING_TOP_NODE_EXECUTABLE, SPINNING_TOP_NODE_EXECUTABLE, "__name:=overloaded", "_integrator:=rk4",
+          "_step:=1e-8", "_tick_budget:=0.05", "_publish_clock:=false", "_body_frame:=overloaded_top",
+          "_contact_frame:=overloaded_contact", static_cast<char*>(nullptr));
+    _exit(127);
+  }
+  ASSERT_GT(pid, 0);
+  EXPECT_TRUE(wait_for([&] { return points.size() > 2; }, 20.0)) << "the node never published";
+  const ros::WallTime sent = ros::WallTime::now();
+  ASSERT_EQ(kill(pid, SIGINT), 0);
+  int status = 0;
+  pid_t done = 0;
+  while ((done = waitpid(pid, &status, WNOHANG)) == 0 && (ros::WallTime::now() - sent).toSec() < 10.0)
+    ros::WallDuration(0.01).sleep();
+  const double exit_wall = (ros::WallTime::now() - sent).toSec();
+  if (done == 0) {
+    kill(pid, SIGKILL);
+    waitpid(pid, &status, 0);
+    FAIL() << "still running 10 s after SIGINT";
+  }
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << "status " << status;
+  std::printf("[ measured ] exit %.3f s after SIGINT (tick budget 0.05 s)\n", exit_wall);
+}
+
+// NaN, inf and huge values for every live double: each refused, the configuration returned
+// is the previous one, and the node goes on with finite states and no event.
+TEST(NodeRobustness, ReconfigureWithNonFiniteOrHugeValuesIsRefused) {
+  ros::NodeHandle nh;
+  Recorder<geometry_msgs::WrenchStamped> forces(nh, "/steady/normal_force");
+  Recorder<std_msgs::String> events(nh, "/steady/event");
+  const double inf = std::numeric_limits<double>::infinity(), nan = std::numeric_limits<double>::quiet_NaN();
+  for (const std::string name : {"friction", "gravity", "tolerance", "step", "rate", "real_time_factor"}) {
+    double current = 0.0;
+    ASSERT_TRUE(ros::param::get("/steady/" + name, current)) << name;
+    for (const double bad : {nan, inf, -inf, 1e300, -1e300}) {
+      if (name == "step" && bad == 1e300) continue;  // auto ignores step; a huge one is harmless
+      const double answered = reconfigure("/steady", name, bad);
+      EXPECT_EQ(answered, current) << name << " = " << bad << " was not refused";
+    }
+  }
+  forces.clear();
+  ASSERT_TRUE(wait_for([&] { return forces.size() > 50; }, 10.0));
+  for (const auto& w : forces.messages()) EXPECT_TRUE(finite(w));
+  for (const auto& e : events.messages()) EXPECT_EQ(e.data, "") << "event after refused updates";
+}
+
+// Calls the node cannot understand: a Trigger service called with another type (the md5 sums
+// differ, so roscpp rejects the call), a reconfigure naming no parameter of ours or giving an
+// int for a double. The node stays up and unchanged.
+TEST(NodeRobustness, MalformedServiceCallsLeaveTheNodeRunning) {
+  ros::NodeHandle nh;
+  ASSERT_TRUE(ros::service::waitForService("/steady/reset", ros::Duration(10.0)));
+  std_srvs::Empty empty;
+  EXPECT_FALSE(ros::service::call("/steady/reset", empty));
+  std_srvs::SetBool set_bool;
+  EXPECT_FALSE(ros::service::call("/steady/pause", set_bool));
+  double gravity = 0.0;
+  ASSERT_TRUE(ros::param::get("/steady/gravity", gravity));
+  dynamic_reconfigure::Reconfigure srv;
+  dynamic_reconfigure::DoubleParameter unknown;
+  unknown.name = "no_such_parameter";
+  unknown.value = 1.0;
+  srv.request.config.doubles.push_back(unknown);
+  dynamic_reconfigure::IntParameter wrong_type;
+  wrong_type.name = "gravity";
+  wrong_type.value = 3;
+  srv.request.config.ints.push_back(wrong_type);
+  EXPECT_TRUE(ros::service::call("/steady/set_parameters", srv));
+  for (const auto& d : srv.response.config.doubles)
+    if (d.name == "gravity") {
+      EXPECT_EQ(d.value, gravity);
+    }
+  Recorder<geometry_msgs::PointStamped> points(nh, "/steady/contact_point");
+  EXPECT_TRUE(wait_for([&] { return points.size() > 50; }, 10.0)) << "the node stopped publishing";
+}
+
+int main(int argc, char** argv) {
+  testing::InitGoogleTest(&argc, argv);
+  ros::init(argc, argv, "test_node_robustness");
+  ros::NodeHandle nh;
+  ros::AsyncSpinner spinner(2);
+  spinner.start();
+  const int result = RUN_ALL_TESTS();
+  ros::shutdown();
+  return result;
+}
