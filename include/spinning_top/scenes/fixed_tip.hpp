@@ -114,8 +114,11 @@ class FixedTip {
     const double h = parameters_.tip_distance, a0 = parameters_.inertia_about_tip();
     const double c = parameters_.inertia_axial;
     ModelOutputs out;
-    const Vector3 force = q * pivot_force_in_body(y);
-    out.normal_force = force.z();
+    const Vector3 force_in_body = pivot_force_in_body(y);
+    const Vector3 force = q * force_in_body;
+    // R as the event function computes it (normal_force()), so that the two never disagree in
+    // sign by round-off: q * F gave R = -5.7e-14 N at a located lift-off (found by the fuzz test).
+    out.normal_force = force_in_body.dot(gamma);
     out.contact_force = Vector3(force.x(), force.y(), 0.0);
     out.center_of_mass = h * (q * Vector3::UnitZ());
     out.center_of_mass_velocity = h * (q * Vector3(wy, -wx, 0.0));  // v_G = h w x e_Z
