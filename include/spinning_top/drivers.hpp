@@ -225,9 +225,14 @@ class AdaptiveDriver : public DriverBase<Model> {
       this->y_out_ = y_;
       return this->event_ = pending_;
     }
+    State y = Method::dense(dense_step(model), t_target);
+    normalize_attitude(y);
+    // The monitor checks the balance at the steps' ends; an interpolated state between them can
+    // break it where the steps do not (dopri5 at tolerance 1e-3: 1.4x the allowed drift, found
+    // by the fuzz test). The run then stops at the last state it answered.
+    if (!monitor_.keeps_balance(model, y)) return this->event_ = Event::kEnergyDrift;
     this->t_out_ = t_target;
-    this->y_out_ = Method::dense(dense_step(model), t_target);
-    normalize_attitude(this->y_out_);
+    this->y_out_ = y;
     return Event::kNone;
   }
 
