@@ -26,7 +26,7 @@ if [ "$(id -u)" -eq 0 ]; then "$SPINNING_TOP_ROOT/scripts/setup.sh" --bench; fi
 echo "bench.sh: building the benchmarks in $SPINNING_TOP_BUILD (Release)"
 cmake -S "$SPINNING_TOP_ROOT" -B "$SPINNING_TOP_BUILD" \
   -DPYTHON_EXECUTABLE=/usr/bin/python3 -DCMAKE_BUILD_TYPE="${CMAKE_BUILD_TYPE:-Release}" >/dev/null
-targets=(work_precision reinit_cost fallback_tolerance viscous_default)
+targets=(work_precision reinit_cost fallback_tolerance viscous_default fuzz_soak)
 grep -q "add_executable(extreme_cases" "$SPINNING_TOP_ROOT/bench/CMakeLists.txt" && targets+=(extreme_cases)
 cmake --build "$SPINNING_TOP_BUILD" --target "${targets[@]}" -- -j"$(nproc)"
 
@@ -50,6 +50,13 @@ echo "bench.sh: auto's fallback tolerance (dop853 against exact)"
 if [ -x "$bin/extreme_cases" ]; then
   echo "bench.sh: extreme cases"
   "$bin/extreme_cases" --output-dir "$results"
+fi
+
+echo "bench.sh: fuzz (1e5 cases) and a one-hour soak of each scene (issue 10)"
+if [ ${#quick[@]} -eq 0 ]; then
+  "$bin/fuzz_soak" --output-dir "$results"
+else
+  "$bin/fuzz_soak" --output-dir "$results" --cases 10000 --hours 0.1
 fi
 
 echo "bench.sh: plots and summary"
