@@ -57,11 +57,12 @@ int run_fuzz(long cases, const std::string& dir) {
   std::map<std::string, long> events, methods, refused;
   long ran = 0, out_of_budget = 0, applied = 0, refused_updates = 0, resets = 0;
   double worst_norm = 0.0, worst_balance = 0.0, slowest = 0.0;
+  long slowest_seed = 0;
   for (long seed = 1; seed <= cases; ++seed) {
     fuzz::Case c(static_cast<unsigned long long>(seed));
     const fuzz::Outcome o = c.run(limits);
     failures.insert(failures.end(), o.failures.begin(), o.failures.end());
-    slowest = std::max(slowest, o.wall);
+    if (o.wall > slowest) slowest = o.wall, slowest_seed = seed;
     if (o.kind == fuzz::Outcome::Kind::kRefused) {
       ++refused[o.refused_key];
       continue;
@@ -80,7 +81,8 @@ int run_fuzz(long cases, const std::string& dir) {
   const double cpu = cpu_seconds() - start;
   std::ofstream md(dir + "/fuzz.md");
   md << "Fuzz (bench/fuzz_soak, the harness of test/test_fuzz.cpp): " << cases << " cases, seeds 1 to " << cases
-     << ", " << format("%.0f", cpu) << " s of CPU (slowest case " << format("%.2f", slowest) << " s wall).\n\n";
+     << ", " << format("%.0f", cpu) << " s of CPU (slowest case " << format("%.2f", slowest) << " s wall, seed "
+     << slowest_seed << ").\n\n";
   md << "| outcome | cases |\n|---|---|\n";
   md << "| refused at construction, naming the key | " << cases - ran << " |\n";
   md << "| ran | " << ran << " |\n";
