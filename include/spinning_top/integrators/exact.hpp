@@ -382,10 +382,11 @@ class ExactSolution {
   /// sec. 33): q(t) = exp(t L_world / A') q0 exp(t nu e_Z); omega_perp turns by -nu t in the body.
   /// The axis moves on its cone: e_Zz(t) = a + b cos(w t) + c sin(w t) = a + rho cos(w t - delta)
   /// (Rodrigues' rotation of e_Z about L). It falls through the floor first at
-  /// w t = delta + acos(-a / rho) (mod 2 pi). Here g h = 0: with h = 0 (G at the tip) R = m g never
-  /// changes sign; with g = 0 on the pivot G = h e_Z, so R = m z_G'' = -m h w^2 rho cos(w t - delta),
-  /// negative (lift-off) once w t - delta passes -pi/2 (mod 2 pi) (found by the fuzz test: this
-  /// lift-off was missed and a state with R = -1e-3 N published).
+  /// w t = delta + acos(-a / rho) (mod 2 pi). This case runs where the torque m g h vanishes in
+  /// floating point (h = 0, g = 0, or m or g so small that 2 m g h / A' underflows), but the floor
+  /// force R = m (g + z_G'') = m (g - h w^2 rho cos(w t - delta)) can still turn negative: a
+  /// lift-off (found by the fuzz test: missed for g = 0 and for g = 1e-320, and states with R < 0
+  /// published).
   void init_free_rotation() {
     kind_ = Kind::kFreeRotation;
     momentum_world_ = q0_ * Vector3(transverse_ * wx0_, transverse_ * wy0_, axial_ * spin_);
@@ -407,8 +408,11 @@ class ExactSolution {
       first = ahead(delta + std::acos(std::clamp(-a / rho, -1.0, 1.0)));
       event_ = Event::kFallen;
     }
-    if (std::is_same_v<Model, FixedTip> && gravity_ == 0.0 && tip_distance_ > 0.0) {
-      const double lift_off = ahead(delta - 0.5 * exact_detail::kPi);
+    // R = m (g + z_G'') with z_G = h e_Zz, so R < 0 while cos(w t - delta) > g / (h w^2 rho): from
+    // w t - delta = -acos(g / (h w^2 rho)) (mod 2 pi) on.
+    const double swing = tip_distance_ * rate * rate * rho;  // the largest downward z_G''
+    if (swing > gravity_) {
+      const double lift_off = ahead(delta - std::acos(gravity_ / swing));
       if (lift_off < first) {
         first = lift_off;
         event_ = Event::kLiftOff;
