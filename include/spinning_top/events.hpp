@@ -291,13 +291,13 @@ class EventMonitor {
     return check_projected(model, y_start, t_end, y_end, f_end, state_at);
   }
 
-  /// Steps that the screen could not clear, and the interpolant's evaluations their search took
-  /// (diagnostics: the cost of the search).
   /// Whether a state keeps the energy balance of the run (|B - B0| within kEnergyBalanceTolerance).
   bool keeps_balance(const Model& model, const State& y) const {
     return std::abs(model.energy_balance(y) - balance_) <= allowed_drift_;
   }
 
+  /// Steps that the screen could not clear, and the interpolant's evaluations their search took
+  /// (diagnostics: the cost of the search).
   long searches() const { return searches_; }
   long interpolant_evaluations() const { return interpolant_evaluations_; }
 
@@ -310,21 +310,23 @@ class EventMonitor {
     return outcome;
   }
 
+  /// The step broke the energy balance: the run stops at its start, the last state that kept it.
+  StepOutcome energy_drift(const State& y_start) const {
+    StepOutcome outcome;
+    outcome.event = Event::kEnergyDrift;
+    outcome.time = t_;
+    outcome.state = y_start;
+    return outcome;
+  }
+
   /// Step 1 of the class comment (the screen), and the search if it cannot clear the step.
   template <class StateAt>
   SPINNING_TOP_FLATTEN StepOutcome check_projected(const Model& model, const State& y_start, double t_end,
                                                    const State& y_end, const State& f_end, const StateAt& state_at) {
     const Eigen::Vector2d g_end = event_functions(model, y_end);
     if (!std::isfinite(g_end[0]) || !std::isfinite(g_end[1])) return non_finite();
-    // A step that breaks the energy balance is garbage throughout (an event inside it too):
-    // the run stops at its start, the last state that kept the balance.
-    if (!keeps_balance(model, y_end)) {
-      StepOutcome outcome;
-      outcome.event = Event::kEnergyDrift;
-      outcome.time = t_;
-      outcome.state = y_start;
-      return outcome;
-    }
+    // A step that breaks the energy balance is garbage throughout (an event inside it too).
+    if (!keeps_balance(model, y_end)) return energy_drift(y_start);
     const Eigen::Vector2d rate_end = event_rates(model, y_end, g_end, f_end);
     const double dt = t_end - t_;
     bool search = false, suspect[event_index::kCount];
@@ -337,16 +339,12 @@ class EventMonitor {
     }
     if (search) {
       ++searches_;
-      StepOutcome outcome = search_step(model, y_start, t_end, g_end, cubic, suspect, state_at);
+      const StepOutcome outcome = search_step(model, y_start, t_end, g_end, cubic, suspect, state_at);
       // The located state comes from the step's interpolant, which may break the balance where
       // the step's end keeps it (dop853 at tolerance 9e-3 with stiff friction: 700x the allowed
       // drift at a located lift-off, found by the fuzz test).
-      if (outcome.event != Event::kNone && !keeps_balance(model, outcome.state)) {
-        outcome.event = Event::kEnergyDrift;
-        outcome.time = t_;
-        outcome.state = y_start;
-      }
-      if (outcome.event != Event::kNone) return outcome;
+      if (outcome.event != Event::kNone)
+        return keeps_balance(model, outcome.state) ? outcome : energy_drift(y_start);
     }
     t_ = t_end;
     g_ = g_end;

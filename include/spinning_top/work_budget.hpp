@@ -13,7 +13,9 @@ namespace spinning_top {
 struct WorkBudget {
   using Clock = std::chrono::steady_clock;
 
-  long max_steps = std::numeric_limits<long>::max();  ///< steps (substeps, attempts included) per call
+  /// Steps per call: fixed-step substeps, or accepted adaptive steps (a step's rejected attempts
+  /// count with it).
+  long max_steps = std::numeric_limits<long>::max();
   Clock::time_point deadline = Clock::time_point::max();
 
   static WorkBudget unlimited() { return WorkBudget(); }
@@ -43,7 +45,6 @@ class BudgetMeter {
     ++taken_;
     return true;
   }
-  long taken() const { return taken_; }
 
  private:
   const WorkBudget& budget_;
