@@ -47,6 +47,13 @@ void require_frame(const std::string& key, const std::string& frame) {
                       "between names (REP-105 names such as world, top)");
 }
 
+/// The pacing keys, checked alike at start and by dynamic_reconfigure: throws InvalidParameter.
+void validate_pacing(double rate, double real_time_factor) {
+  require(std::isfinite(rate) && rate > 0.0 && rate <= kMaxRate, "rate", format("must lie in (0, %g] Hz", kMaxRate));
+  require(std::isfinite(real_time_factor) && real_time_factor >= 0.0 && real_time_factor <= kMaxRealTimeFactor,
+          "real_time_factor", format("must lie in [0, %g] (0 = as fast as possible)", kMaxRealTimeFactor));
+}
+
 bool finite(const Vector3& v) { return v.allFinite(); }
 
 bool finite(const Snapshot& s) {
@@ -124,11 +131,8 @@ void warn_about_unknown_keys(const ros::NodeHandle& private_nh) {
 NodeSettings read_node_settings(const ros::NodeHandle& nh) {
   NodeSettings s;
   s.rate = read_number(nh, "rate", s.rate);
-  require(std::isfinite(s.rate) && s.rate > 0.0 && s.rate <= kMaxRate, "rate",
-          format("must lie in (0, %g] Hz", kMaxRate));
   s.real_time_factor = read_number(nh, "real_time_factor", s.real_time_factor);
-  require(std::isfinite(s.real_time_factor) && s.real_time_factor >= 0.0 && s.real_time_factor <= kMaxRealTimeFactor,
-          "real_time_factor", format("must lie in [0, %g] (0 = as fast as possible)", kMaxRealTimeFactor));
+  validate_pacing(s.rate, s.real_time_factor);
   s.tick_budget = read_number(nh, "tick_budget", s.tick_budget);
   require(std::isfinite(s.tick_budget) && s.tick_budget >= 1e-4 && s.tick_budget <= 1.0, "tick_budget",
           "must lie in [1e-4, 1] s (the wall time one callback may integrate before the node serves "
@@ -542,11 +546,11 @@ void SpinningTopNode::reconfigure(SpinningTopConfig& config, uint32_t /*level*/)
               why.c_str());
     config = applied_config_;  // sent back to the client as the current configuration
   };
-  if (!(std::isfinite(config.rate) && config.rate > 0.0 && config.rate <= kMaxRate))
-    return refuse(format("rate: must lie in (0, %g] Hz", kMaxRate));
-  if (!(std::isfinite(config.real_time_factor) && config.real_time_factor >= 0.0 &&
-        config.real_time_factor <= kMaxRealTimeFactor))
-    return refuse(format("real_time_factor: must lie in [0, %g] (0 = as fast as possible)", kMaxRealTimeFactor));
+  try {
+    validate_pacing(config.rate, config.real_time_factor);
+  } catch (const InvalidParameter& error) {
+    return refuse(error.what());
+  }
 
   TopParameters top = simulator_->config().top;
   IntegratorSettings integrator = simulator_->config().integrator;
