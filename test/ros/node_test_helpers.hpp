@@ -1,11 +1,15 @@
 // Small helpers shared by the node's rostest gtests: collect messages from a topic, wait
-// for a condition, call a Trigger service.
+// for a condition, call a Trigger service or dynamic_reconfigure, check a force, run the tests.
 #pragma once
 
+#include <dynamic_reconfigure/DoubleParameter.h>
+#include <dynamic_reconfigure/Reconfigure.h>
+#include <geometry_msgs/WrenchStamped.h>
 #include <gtest/gtest.h>
 #include <ros/ros.h>
 #include <std_srvs/Trigger.h>
 
+#include <cmath>
 #include <functional>
 #include <mutex>
 #include <string>
@@ -58,6 +62,38 @@ inline std_srvs::Trigger::Response trigger(const std::string& service) {
   std_srvs::Trigger srv;
   EXPECT_TRUE(ros::service::call(service, srv)) << service;
   return srv.response;
+}
+
+/// Sets one double of `node` (e.g. "/spinning_top") through dynamic_reconfigure; returns the
+/// value the node reports back as its configuration (the previous one when it refuses).
+inline double reconfigure(const std::string& node, const std::string& name, double value) {
+  EXPECT_TRUE(ros::service::waitForService(node + "/set_parameters", ros::Duration(10.0)));
+  dynamic_reconfigure::Reconfigure srv;
+  dynamic_reconfigure::DoubleParameter parameter;
+  parameter.name = name;
+  parameter.value = value;
+  srv.request.config.doubles.push_back(parameter);
+  EXPECT_TRUE(ros::service::call(node + "/set_parameters", srv)) << name << " = " << value;
+  for (const auto& d : srv.response.config.doubles)
+    if (d.name == name) return d.value;
+  ADD_FAILURE() << name << " missing from the reconfigure response";
+  return NAN;
+}
+
+inline bool finite(const geometry_msgs::WrenchStamped& w) {
+  return std::isfinite(w.wrench.force.x) && std::isfinite(w.wrench.force.y) && std::isfinite(w.wrench.force.z);
+}
+
+/// A rostest gtest's main: ROS node `name`, callbacks on an AsyncSpinner of `threads` threads.
+inline int run_node_tests(int argc, char** argv, const char* name, int threads) {
+  testing::InitGoogleTest(&argc, argv);
+  ros::init(argc, argv, name);
+  ros::NodeHandle nh;
+  ros::AsyncSpinner spinner(threads);
+  spinner.start();
+  const int result = RUN_ALL_TESTS();
+  ros::shutdown();
+  return result;
 }
 
 }  // namespace node_test

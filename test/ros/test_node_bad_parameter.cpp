@@ -107,11 +107,4 @@ TEST(NodeBadParameter, ValidParametersKeepTheNodeRunning) {
       << outcome.output;
 }
 
-int main(int argc, char** argv) {
-  testing::InitGoogleTest(&argc, argv);
-  ros::init(argc, argv, "test_node_bad_parameter");
-  ros::NodeHandle nh;
-  ros::AsyncSpinner spinner(1);
-  spinner.start();
-  return RUN_ALL_TESTS();
-}
+int main(int argc, char** argv) { return node_test::run_node_tests(argc, argv, "test_node_bad_parameter", 1); }

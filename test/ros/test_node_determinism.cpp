@@ -131,13 +131,4 @@ TEST(NodeDeterminism, TwoRunsAtDifferentPaceAndBudgetPublishTheSameSamples) {
   EXPECT_EQ(differing, 0);
 }
 
-int main(int argc, char** argv) {
-  testing::InitGoogleTest(&argc, argv);
-  ros::init(argc, argv, "test_node_determinism");
-  ros::NodeHandle nh;
-  ros::AsyncSpinner spinner(2);
-  spinner.start();
-  const int result = RUN_ALL_TESTS();
-  ros::shutdown();
-  return result;
-}
+int main(int argc, char** argv) { return node_test::run_node_tests(argc, argv, "test_node_determinism", 2); }

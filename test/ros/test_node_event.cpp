@@ -13,6 +13,7 @@
 
 #include "node_test_helpers.hpp"
 
+using node_test::finite;
 using node_test::Recorder;
 using node_test::trigger;
 using node_test::wait_for;
@@ -20,10 +21,6 @@ using node_test::wait_for;
 namespace {
 
 bool is_event_name(const std::string& name) { return name == "fallen" || name == "lift_off"; }
-
-bool finite(const geometry_msgs::WrenchStamped& w) {
-  return std::isfinite(w.wrench.force.x) && std::isfinite(w.wrench.force.y) && std::isfinite(w.wrench.force.z);
-}
 
 }  // namespace
 
@@ -78,11 +75,4 @@ TEST(NodeEvent, FallingTopEndsWithTheEventAndNoNaN) {
   EXPECT_EQ(after_reset[1].data, event);
 }
 
-int main(int argc, char** argv) {
-  testing::InitGoogleTest(&argc, argv);
-  ros::init(argc, argv, "test_node_event");
-  ros::NodeHandle nh;
-  ros::AsyncSpinner spinner(2);
-  spinner.start();
-  return RUN_ALL_TESTS();
-}
+int main(int argc, char** argv) { return node_test::run_node_tests(argc, argv, "test_node_event", 2); }

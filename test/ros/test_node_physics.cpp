@@ -3,8 +3,6 @@
 // /exact (the default scene with integrator: exact, 200 Hz) and /weightless (frictionless, g = 0,
 // at rest without spin, 200 Hz: nothing drives the nutation, exact refuses it, auto runs dop853).
 #include <diagnostic_msgs/DiagnosticArray.h>
-#include <dynamic_reconfigure/DoubleParameter.h>
-#include <dynamic_reconfigure/Reconfigure.h>
 #include <geometry_msgs/PointStamped.h>
 #include <geometry_msgs/WrenchStamped.h>
 #include <gtest/gtest.h>
@@ -23,6 +21,7 @@
 
 #include "node_test_helpers.hpp"
 
+using node_test::reconfigure;
 using node_test::Recorder;
 using node_test::trigger;
 using node_test::wait_for;
@@ -55,22 +54,6 @@ Eigen::Vector3d axis_of_fixed_tip_top(const geometry_msgs::TransformStamped& t, 
   const Eigen::Vector3d axis = q.normalized() * Eigen::Vector3d::UnitZ();
   EXPECT_NEAR((translation_of(t) - h * axis).norm(), 0.0, 1e-12);
   return axis;
-}
-
-/// Sets one double of /spinning_top through dynamic_reconfigure; returns the value the
-/// node reports back as its configuration.
-double reconfigure(const std::string& name, double value) {
-  EXPECT_TRUE(ros::service::waitForService("/spinning_top/set_parameters", ros::Duration(10.0)));
-  dynamic_reconfigure::Reconfigure srv;
-  dynamic_reconfigure::DoubleParameter parameter;
-  parameter.name = name;
-  parameter.value = value;
-  srv.request.config.doubles.push_back(parameter);
-  EXPECT_TRUE(ros::service::call("/spinning_top/set_parameters", srv));
-  for (const auto& d : srv.response.config.doubles)
-    if (d.name == name) return d.value;
-  ADD_FAILURE() << name << " missing from the reconfigure response";
-  return NAN;
 }
 
 }  // namespace
@@ -195,13 +178,13 @@ TEST(Node, StampsAdvanceByExactlyOneTickAndNeverRepeat) {
 TEST(Node, InvalidReconfigureIsRefusedAndSimulationContinues) {
   ros::NodeHandle nh;
   const double g = param("/spinning_top/gravity");
-  EXPECT_EQ(reconfigure("friction", 0.5), 0.0);
-  EXPECT_EQ(reconfigure("gravity", -1.0), g);
-  EXPECT_EQ(reconfigure("tolerance", 0.0), param("/spinning_top/tolerance"));
-  EXPECT_EQ(reconfigure("rate", -5.0), param("/spinning_top/rate"));
+  EXPECT_EQ(reconfigure("/spinning_top", "friction", 0.5), 0.0);
+  EXPECT_EQ(reconfigure("/spinning_top", "gravity", -1.0), g);
+  EXPECT_EQ(reconfigure("/spinning_top", "tolerance", 0.0), param("/spinning_top/tolerance"));
+  EXPECT_EQ(reconfigure("/spinning_top", "rate", -5.0), param("/spinning_top/rate"));
   // A valid update is applied (and undone so that the other tests see the scene file).
-  EXPECT_EQ(reconfigure("gravity", 9.0), 9.0);
-  EXPECT_EQ(reconfigure("gravity", g), g);
+  EXPECT_EQ(reconfigure("/spinning_top", "gravity", 9.0), 9.0);
+  EXPECT_EQ(reconfigure("/spinning_top", "gravity", g), g);
 
   Recorder<geometry_msgs::PointStamped> points(nh, "/spinning_top/contact_point");
   ASSERT_TRUE(wait_for([&] { return points.size() >= 100; }, 10.0));
@@ -213,11 +196,11 @@ TEST(Node, InvalidReconfigureIsRefusedAndSimulationContinues) {
 TEST(Node, LiveRateChangeGivesTheNewTickExactly) {
   ros::NodeHandle nh;
   const double rate = param("/spinning_top/rate");
-  ASSERT_EQ(reconfigure("rate", 250.0), 250.0);
+  ASSERT_EQ(reconfigure("/spinning_top", "rate", 250.0), 250.0);
   ros::WallDuration(0.3).sleep();  // let ticks at the old rate arrive first
   Recorder<geometry_msgs::PointStamped> points(nh, "/spinning_top/contact_point");
   ASSERT_TRUE(wait_for([&] { return points.size() >= 100; }, 10.0));
-  EXPECT_EQ(reconfigure("rate", rate), rate);
+  EXPECT_EQ(reconfigure("/spinning_top", "rate", rate), rate);
   const auto messages = points.messages();
   for (size_t i = 1; i < 100; ++i)
     ASSERT_NEAR((messages[i].header.stamp - messages[i - 1].header.stamp).toSec(), 1.0 / 250.0, 2e-9) << i;

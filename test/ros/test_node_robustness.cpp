@@ -29,31 +29,13 @@
 
 #include "node_test_helpers.hpp"
 
+using node_test::finite;
+using node_test::reconfigure;
 using node_test::Recorder;
 using node_test::trigger;
 using node_test::wait_for;
 
 namespace {
-
-bool finite(const geometry_msgs::WrenchStamped& w) {
-  return std::isfinite(w.wrench.force.x) && std::isfinite(w.wrench.force.y) && std::isfinite(w.wrench.force.z);
-}
-
-/// Sets one double of `node` through dynamic_reconfigure; returns the value the node reports
-/// back as its configuration (the previous one when it refuses).
-double reconfigure(const std::string& node, const std::string& name, double value) {
-  EXPECT_TRUE(ros::service::waitForService(node + "/set_parameters", ros::Duration(10.0)));
-  dynamic_reconfigure::Reconfigure srv;
-  dynamic_reconfigure::DoubleParameter parameter;
-  parameter.name = name;
-  parameter.value = value;
-  srv.request.config.doubles.push_back(parameter);
-  EXPECT_TRUE(ros::service::call(node + "/set_parameters", srv)) << name << " = " << value;
-  for (const auto& d : srv.response.config.doubles)
-    if (d.name == name) return d.value;
-  ADD_FAILURE() << name << " missing from the reconfigure response";
-  return NAN;
-}
 
 /// The latest status of `node`'s simulation in /diagnostics.
 struct LatestStatus {
@@ -208,13 +190,4 @@ TEST(NodeRobustness, MalformedServiceCallsLeaveTheNodeRunning) {
   EXPECT_TRUE(wait_for([&] { return points.size() > 50; }, 10.0)) << "the node stopped publishing";
 }
 
-int main(int argc, char** argv) {
-  testing::InitGoogleTest(&argc, argv);
-  ros::init(argc, argv, "test_node_robustness");
-  ros::NodeHandle nh;
-  ros::AsyncSpinner spinner(2);
-  spinner.start();
-  const int result = RUN_ALL_TESTS();
-  ros::shutdown();
-  return result;
-}
+int main(int argc, char** argv) { return node_test::run_node_tests(argc, argv, "test_node_robustness", 2); }
