@@ -15,7 +15,6 @@
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
-#include <map>
 #include <string>
 #include <vector>
 
@@ -53,55 +52,35 @@ int replay(unsigned long long seed) {
 int run_fuzz(long cases, const std::string& dir) {
   const double start = cpu_seconds();
   const fuzz::Limits limits;
-  std::vector<std::string> failures;
-  std::map<std::string, long> events, methods, refused;
-  long ran = 0, out_of_budget = 0, applied = 0, refused_updates = 0, resets = 0;
-  double worst_norm = 0.0, worst_balance = 0.0, slowest = 0.0;
-  long slowest_seed = 0;
+  fuzz::Tally t;
   for (long seed = 1; seed <= cases; ++seed) {
-    fuzz::Case c(static_cast<unsigned long long>(seed));
-    const fuzz::Outcome o = c.run(limits);
-    failures.insert(failures.end(), o.failures.begin(), o.failures.end());
-    if (o.wall > slowest) slowest = o.wall, slowest_seed = seed;
-    if (o.kind == fuzz::Outcome::Kind::kRefused) {
-      ++refused[o.refused_key];
-      continue;
-    }
-    ++ran;
-    if (o.kind == fuzz::Outcome::Kind::kOutOfBudget) ++out_of_budget;
-    ++events[o.event == Event::kNone ? "(none)" : to_string(o.event)];
-    ++methods[o.integrator];
-    applied += o.updates_applied;
-    refused_updates += o.updates_refused;
-    resets += o.resets;
-    worst_norm = std::max(worst_norm, o.worst_norm_error);
-    worst_balance = std::max(worst_balance, o.worst_balance);
-    if (seed % 10000 == 0) std::fprintf(stderr, "fuzz: %ld cases, %zu broken promises\n", seed, failures.size());
+    t.add(fuzz::Case(static_cast<unsigned long long>(seed)).run(limits), static_cast<unsigned long long>(seed));
+    if (seed % 10000 == 0) std::fprintf(stderr, "fuzz: %ld cases, %zu broken promises\n", seed, t.failures.size());
   }
   const double cpu = cpu_seconds() - start;
   std::ofstream md(dir + "/fuzz.md");
   md << "Fuzz (bench/fuzz_soak, the harness of test/test_fuzz.cpp): " << cases << " cases, seeds 1 to " << cases
-     << ", " << format("%.0f", cpu) << " s of CPU (slowest case " << format("%.2f", slowest) << " s wall, seed "
-     << slowest_seed << ").\n\n";
+     << ", " << format("%.0f", cpu) << " s of CPU (slowest case " << format("%.2f", t.slowest) << " s wall, seed "
+     << t.slowest_seed << ").\n\n";
   md << "| outcome | cases |\n|---|---|\n";
-  md << "| refused at construction, naming the key | " << cases - ran << " |\n";
-  md << "| ran | " << ran << " |\n";
-  md << "| ... of which stopped by their work budget (" << limits.steps_per_case << " steps) | " << out_of_budget
+  md << "| refused at construction, naming the key | " << cases - t.ran << " |\n";
+  md << "| ran | " << t.ran << " |\n";
+  md << "| ... of which stopped by their work budget (" << limits.steps_per_case << " steps) | " << t.out_of_budget
      << " |\n";
-  for (const auto& kv : events) md << "| ... ended by event " << kv.first << " | " << kv.second << " |\n";
-  md << "\nLive updates applied " << applied << ", refused " << refused_updates << " (state unchanged, bit for bit); resets "
-     << resets << ".\n";
-  md << "Worst | |q| - 1 | " << format("%.2g", worst_norm) << "; worst energy-balance drift "
-     << format("%.2f", worst_balance) << " of the allowed 1e-3 (|B0| + m g h).\n";
-  md << "**Broken promises: " << failures.size() << "**.\n\n";
+  for (const auto& kv : t.events) md << "| ... ended by event " << kv.first << " | " << kv.second << " |\n";
+  md << "\nLive updates applied " << t.updates_applied << ", refused " << t.updates_refused
+     << " (state unchanged, bit for bit); resets " << t.resets << ".\n";
+  md << "Worst | |q| - 1 | " << format("%.2g", t.worst_norm_error) << "; worst energy-balance drift "
+     << format("%.2f", t.worst_balance) << " of the allowed 1e-3 (|B0| + m g h).\n";
+  md << "**Broken promises: " << t.failures.size() << "**.\n\n";
   md << "Methods that ran:";
-  for (const auto& kv : methods) md << " " << kv.first << " " << kv.second << ";";
+  for (const auto& kv : t.methods) md << " " << kv.first << " " << kv.second << ";";
   md << "\n\nRefusals by key:";
-  for (const auto& kv : refused) md << " " << kv.first << " " << kv.second << ";";
+  for (const auto& kv : t.refused_by_key) md << " " << kv.first << " " << kv.second << ";";
   md << "\n";
-  for (std::size_t i = 0; i < std::min<std::size_t>(failures.size(), 50); ++i) md << "\n- " << failures[i];
-  std::printf("fuzz: %ld cases, %ld ran, %zu broken promises, %.0f s CPU\n", cases, ran, failures.size(), cpu);
-  return failures.empty() ? 0 : 1;
+  for (std::size_t i = 0; i < std::min<std::size_t>(t.failures.size(), 50); ++i) md << "\n- " << t.failures[i];
+  std::printf("fuzz: %ld cases, %ld ran, %zu broken promises, %.0f s CPU\n", cases, t.ran, t.failures.size(), cpu);
+  return t.failures.empty() ? 0 : 1;
 }
 
 SceneConfig toy_scene(SceneType scene) {

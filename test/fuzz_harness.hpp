@@ -18,7 +18,9 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <map>
 #include <random>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -269,6 +271,38 @@ class Case {
   std::mt19937_64 rng_;
   double baseline_ = 0.0;
   long steps_before_reset_ = 0;
+};
+
+/// Many cases' outcomes summed (test_fuzz, bench/fuzz_soak): what they reached and every broken
+/// promise.
+struct Tally {
+  long cases = 0, ran = 0, out_of_budget = 0, updates_applied = 0, updates_refused = 0, resets = 0;
+  std::map<std::string, long> refused_by_key, events, methods;  ///< events: "(none)" for a full run
+  std::set<SceneType> scenes_run;
+  std::vector<std::string> failures;
+  double worst_norm_error = 0.0, worst_balance = 0.0, wall = 0.0, slowest = 0.0;
+  unsigned long long slowest_seed = 0;
+
+  void add(const Outcome& o, unsigned long long seed) {
+    ++cases;
+    failures.insert(failures.end(), o.failures.begin(), o.failures.end());
+    wall += o.wall;
+    if (o.wall > slowest) slowest = o.wall, slowest_seed = seed;
+    if (o.kind == Outcome::Kind::kRefused) {
+      ++refused_by_key[o.refused_key];
+      return;
+    }
+    ++ran;
+    scenes_run.insert(o.scene);
+    ++methods[o.integrator];
+    if (o.kind == Outcome::Kind::kOutOfBudget) ++out_of_budget;
+    ++events[o.event == Event::kNone ? "(none)" : to_string(o.event)];
+    updates_applied += o.updates_applied;
+    updates_refused += o.updates_refused;
+    resets += o.resets;
+    worst_norm_error = std::max(worst_norm_error, o.worst_norm_error);
+    worst_balance = std::max(worst_balance, o.worst_balance);
+  }
 };
 
 }  // namespace fuzz
