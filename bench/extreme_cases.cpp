@@ -217,7 +217,7 @@ void stiff_friction(const SceneConfig& c, const CaseRun& run, std::vector<Figure
 }
 
 void tiny_step(const std::string& name, const CaseRun& run, std::vector<Figure>& out) {
-  ParameterMap values = load_scene_values(source_file(name));
+  ParameterMap values = read_scene_file(source_file(name));
   values["integrator"] = "dopri5";
   values["tolerance"] = "1e-13";
   values.erase("step");
@@ -234,7 +234,7 @@ Outcome run_case(const Case& c, double cpu_budget, const std::string& integrator
   outcome.horizon = c.horizon;
   SceneConfig config;
   try {
-    ParameterMap values = load_scene_values(source_file(c.name));
+    ParameterMap values = read_scene_file(source_file(c.name));
     if (!integrator_override.empty() && !values.count("integrator")) values["integrator"] = integrator_override;
     config = parse_scene_config(values, true);
     make_simulator(config);
@@ -313,7 +313,7 @@ int main(int argc, char** argv) {
     Outcome o;
     std::string scene = "?";
     try {
-      scene = load_scene_values(source_file(c.name))["scene"];
+      scene = spinning_top::read_scene_file(source_file(c.name))["scene"];
       o = run_case(c, cpu_budget, integrator);
     } catch (const std::exception& e) {
       o.text = std::string("error: ") + e.what();

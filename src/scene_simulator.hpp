@@ -5,7 +5,10 @@
 // every scene x method.
 #pragma once
 
+#include <algorithm>
+#include <cmath>
 #include <memory>
+#include <optional>
 #include <string>
 #include <utility>
 
@@ -53,9 +56,19 @@ class SceneSimulator final : public Simulator {
     return s;
   }
 
+  std::optional<MotionRange> motion_range() const override {
+    if (updated_) return std::nullopt;  // the driver's range starts at the update
+    const std::optional<ClosedFormRange> range = driver_.closed_form_range();
+    if (!range) return std::nullopt;
+    // tilt = 2 asin(sqrt((1 - cos tilt) / 2)): accurate near the vertical, where acos is not.
+    const double half = std::clamp(0.5 * range->one_minus_cos_max_tilt, 0.0, 1.0);
+    return MotionRange{2.0 * std::asin(std::sqrt(half)), config_.top.mass * range->least_normal_force_per_mass};
+  }
+
   bool reset() override {
     const IntegratorChoice before = integrator_choice();
     driver_.reset(model_, 0.0, model_.initial_state());
+    updated_ = false;
     return switched(before);
   }
 
@@ -90,6 +103,7 @@ class SceneSimulator final : public Simulator {
     config_ = next;
     model_ = std::move(model);
     driver_ = std::move(driver);
+    updated_ = true;
     if (event != Event::kNone) driver_.stop(event);  // a stopped run stays stopped until reset()
     return switched(before);
   }
@@ -116,6 +130,7 @@ class SceneSimulator final : public Simulator {
   SceneConfig config_;
   Model model_;
   Driver driver_;
+  bool updated_ = false;  ///< update() restarted the driver mid-run
 };
 
 /// The simulator for the integrator `type` on this scene, or null if the row does not serve it

@@ -14,8 +14,6 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-#include <yaml-cpp/yaml.h>
-
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
@@ -23,18 +21,18 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
-#include <fstream>
 #include <iostream>
 #include <limits>
 #include <memory>
-#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <utility>
 #include <vector>
 
+#include "spinning_top/case_run.hpp"
 #include "spinning_top/config.hpp"
 #include "spinning_top/integrator_registry.hpp"
+#include "spinning_top/scene_file.hpp"
 #include "spinning_top/simulator.hpp"
 
 namespace spinning_top {
@@ -253,57 +251,14 @@ Options parse_options(int argc, char** argv) {
   return options;
 }
 
-/// Flattens nested YAML maps into "a/b" keys with their scalar text (the key names of
-/// ROS's parameter server, so that a scene file is also a `rosparam load` file).
-void flatten(const YAML::Node& node, const std::string& prefix, const std::string& file, ParameterMap& out) {
-  for (const auto& entry : node) {
-    if (!entry.first.IsScalar()) throw UsageError(file + ": keys must be plain names");
-    const std::string name = entry.first.Scalar();
-    const std::string key = prefix.empty() ? name : prefix + "/" + name;
-    const YAML::Node& value = entry.second;
-    if (value.IsMap()) {
-      flatten(value, key, file, out);
-    } else if (value.IsScalar()) {
-      if (!out.emplace(key, value.Scalar()).second) throw UsageError(key + ": given twice in " + file);
-    } else if (value.IsSequence()) {
-      throw UsageError(key + ": a list is not a valid value (in " + file + ")");
-    } else {
-      throw UsageError(key + ": has no value (in " + file + ")");
-    }
-  }
-}
-
-ParameterMap load_scene_file(const std::string& path) {
-  struct stat st {};
-  if (stat(path.c_str(), &st) == 0 && S_ISDIR(st.st_mode))
-    throw UsageError("--config: '" + path + "' is a directory; give a scene file (e.g. config/fixed_tip.yaml)");
-  std::ifstream in(path);
-  if (!in) throw UsageError("--config: cannot read '" + path + "': " + std::strerror(errno));
-  std::stringstream text;
-  text << in.rdbuf();
-  YAML::Node root;
-  try {
-    // One document: a second one (after ---) would otherwise be ignored without a word.
-    const std::vector<YAML::Node> documents = YAML::LoadAll(text.str());
-    if (documents.size() > 1)
-      throw UsageError(path + ": has " + std::to_string(documents.size()) +
-                       " YAML documents (separated by ---); a scene file is one");
-    if (!documents.empty()) root = documents.front();
-  } catch (const YAML::Exception& e) {
-    std::ostringstream where;
-    where << path << ":" << e.mark.line + 1 << ":" << e.mark.column + 1 << ": malformed YAML: " << e.msg;
-    throw UsageError(where.str());
-  }
-  ParameterMap values;
-  if (root.IsNull()) return values;  // an empty file: the missing keys are reported later
-  if (!root.IsMap()) throw UsageError(path + ": the top level must be a map of key: value");
-  flatten(root, "", path, values);
-  return values;
-}
-
 /// The file's keys with the --set overrides applied, parsed and validated.
 SceneConfig read_scene(const Options& options) {
-  ParameterMap values = load_scene_file(options.config_path);
+  ParameterMap values;
+  try {
+    values = read_scene_file(options.config_path);
+  } catch (const SceneFileError& e) {
+    throw UsageError(std::string("--config: ") + e.what());
+  }
   ParameterMap origin;
   for (const auto& [key, value] : values) origin[key] = "in " + options.config_path;
   for (const auto& [key, value] : options.overrides) {
@@ -318,27 +273,6 @@ SceneConfig read_scene(const Options& options) {
                      ")");
   }
 }
-
-/// The output instants: t_i = i / rate for i = 0..N, N = floor(duration * rate), each a
-/// single division (no accumulated round-off); plus t = duration when that is not one of
-/// them. A relative slack of 1e-9 absorbs decimal round-off: 1.1 s at 100 Hz is
-/// 110.00000000000001 intervals in doubles, and gives 111 rows, not a 112th a few ulps later.
-class OutputTimes {
- public:
-  OutputTimes(double duration, double rate) : duration_(duration), rate_(rate) {
-    const double intervals = duration * rate;
-    const double slack = 1e-9 * std::max(1.0, intervals);
-    intervals_ = static_cast<long long>(std::floor(intervals + slack));
-    extra_last_ = intervals - static_cast<double>(intervals_) > slack;
-  }
-  long long rows() const { return intervals_ + 1 + (extra_last_ ? 1 : 0); }
-  double at(long long i) const { return i <= intervals_ ? static_cast<double>(i) / rate_ : duration_; }
-
- private:
-  double duration_, rate_;
-  long long intervals_ = 0;
-  bool extra_last_ = false;
-};
 
 void write_row(std::FILE* out, double t, const Snapshot& s, Event event) {
   const Quaternion& q = s.attitude;
@@ -364,19 +298,19 @@ void write_row(std::FILE* out, double t, const Snapshot& s, Event event) {
 /// Runs the scene and writes the header comment (the method that runs, and why), the header
 /// and every row; returns the event that ended it. Throws StepBudgetExceeded when the run
 /// would take more than max_steps integration steps (the rows up to there are written).
-Event run(Simulator& simulator, const OutputTimes& times, double max_steps, std::FILE* out) {
+Event run(Simulator& simulator, const SampleTimes& times, double max_steps, std::FILE* out) {
   std::fprintf(out, "# integrator: %s\n", simulator.integrator_description().c_str());
   std::fprintf(out, "%s\n", kCsvHeader);
   // An initial state that already violates the model is an event at t = 0.
   Event event = simulator.event();
   write_row(out, 0.0, simulator.snapshot(), event);
-  for (long long i = 1; i < times.rows() && event == Event::kNone; ++i) {
+  for (long long i = 1; i < times.count() && event == Event::kNone; ++i) {
     const double t = times.at(i);
     const long remaining = static_cast<long>(std::max(0.0, max_steps - static_cast<double>(simulator.steps())));
     event = simulator.advance_to(t, WorkBudget::steps(remaining));
     if (event == Event::kNone && simulator.time() < t) {
       char where[160];
-      std::snprintf(where, sizeof where, " (at t = %.9g s of %.9g s)", simulator.time(), times.at(times.rows() - 1));
+      std::snprintf(where, sizeof where, " (at t = %.9g s of %.9g s)", simulator.time(), times.at(times.count() - 1));
       throw StepBudgetExceeded("the run needs more than --max-steps " + std::to_string(static_cast<long>(max_steps)) +
                                " integration steps" + where + " with " + simulator.integrator_description() +
                                ": raise --max-steps, shorten --duration, or loosen step / tolerance");
@@ -551,7 +485,7 @@ int main_with_exit_code(int argc, char** argv) {
     return kExitBadInput;
   }
 
-  const OutputTimes times(options.duration, options.output_rate);
+  const SampleTimes times(options.duration, options.output_rate);
   try {
     if (output.kind == OutputTarget::Kind::kStdout) {
       run(*simulator, times, options.max_steps, stdout);

@@ -4,19 +4,16 @@
 // (issue 4, "Stiff and extreme cases"; doc/spec/PHYSICS.md, "Invariants and balances").
 #pragma once
 
-#include <yaml-cpp/yaml.h>
-
 #include <cmath>
 #include <complex>
 #include <ctime>
-#include <fstream>
 #include <memory>
-#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "spinning_top/config.hpp"
+#include "spinning_top/scene_file.hpp"
 #include "spinning_top/simulator.hpp"
 
 namespace spinning_top {
@@ -26,33 +23,10 @@ namespace extreme {
 constexpr double kNodeStep = 1e-3;
 
 // ---------------------------------------------------------------------------------------------
-// Scene files: the batch simulator's path (src/simulate_main.cpp): nested YAML maps flatten
-// into "a/b" keys, then parse_scene_config(values, require_all = true).
+// Scene files: the batch simulator's path (read_scene_file, then
+// parse_scene_config(values, require_all = true)).
 
-inline void flatten(const YAML::Node& node, const std::string& prefix, ParameterMap& out) {
-  for (const auto& entry : node) {
-    const std::string key = prefix.empty() ? entry.first.Scalar() : prefix + "/" + entry.first.Scalar();
-    if (entry.second.IsMap()) {
-      flatten(entry.second, key, out);
-    } else if (entry.second.IsScalar()) {
-      if (!out.emplace(key, entry.second.Scalar()).second) throw std::runtime_error(key + " given twice");
-    } else {
-      throw std::runtime_error(key + ": not a scalar");
-    }
-  }
-}
-
-inline ParameterMap load_scene_values(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw std::runtime_error("cannot read " + path);
-  std::stringstream text;
-  text << in.rdbuf();
-  ParameterMap values;
-  flatten(YAML::Load(text.str()), "", values);
-  return values;
-}
-
-inline SceneConfig load_scene(const std::string& path) { return parse_scene_config(load_scene_values(path), true); }
+inline SceneConfig load_scene(const std::string& path) { return parse_scene_config(read_scene_file(path), true); }
 
 // ---------------------------------------------------------------------------------------------
 // A run at the node's rate.

@@ -396,7 +396,7 @@ TEST(ExtremeCases, TinyFixedStepMatchesTheReference) {
   const CaseRun run = run_at_node_rate(c, duration);
   expect_finite(run);
   EXPECT_EQ(run.event, Event::kNone);
-  ParameterMap values = load_scene_values(scene_file("tiny_step"));
+  ParameterMap values = read_scene_file(scene_file("tiny_step"));
   values["integrator"] = "dopri5";
   values["tolerance"] = "1e-13";
   values.erase("step");

@@ -91,6 +91,9 @@ class AutoDriver {
     return choice_.reason.empty() ? running : running + " (" + choice_.reason + ")";
   }
   const IntegratorChoice& choice() const { return choice_; }
+  std::optional<ClosedFormRange> closed_form_range() const {
+    return visit([](const auto& driver) { return driver.closed_form_range(); });
+  }
 
  private:
   /// Emplaces the candidate of settings.type and starts it at (t, y); throws what its reset throws.

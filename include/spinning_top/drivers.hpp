@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <type_traits>
@@ -26,10 +27,18 @@
 namespace spinning_top {
 
 /// Common state of a driver: the reported time and state, and the event that ended the run.
+/// The extremes of a motion since its start, where a method knows them in closed form.
+struct ClosedFormRange {
+  double one_minus_cos_max_tilt = 0.0;       ///< 1 - e_Zz at the largest tilt
+  double least_normal_force_per_mass = 0.0;  ///< least R / m [m/s^2]
+};
+
 template <class Model>
 class DriverBase {
  public:
   using State = typename Model::State;
+  /// A time-stepper knows its motion only at its steps: no closed-form range (exact.hpp has one).
+  std::optional<ClosedFormRange> closed_form_range() const { return std::nullopt; }
   double time() const { return t_out_; }
   const State& state() const { return y_out_; }
   Event event() const { return event_; }

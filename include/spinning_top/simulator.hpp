@@ -3,6 +3,7 @@
 #pragma once
 
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "spinning_top/events.hpp"
@@ -100,6 +101,12 @@ struct IntegratorChoice {
   std::string reason;     ///< auto: the first choice's refusal (fallback), or why it is the first choice; may be ""
 };
 
+/// Extremes of a run over [0, time()].
+struct MotionRange {
+  double max_tilt = 0.0;          ///< [rad] the largest angle of the axis from the vertical
+  double min_normal_force = 0.0;  ///< [N] the least R
+};
+
 /// What a front end shows of the simulation at one instant.
 struct Snapshot {
   double time = 0.0;                          ///< simulated time [s]
@@ -140,6 +147,10 @@ class Simulator {
   /// "auto: dop853, tolerance 1e-12 (exact refused: <its reason>)".
   virtual std::string integrator_description() const = 0;
   virtual IntegratorChoice integrator_choice() const = 0;
+  /// The run's extremes over [0, time()] in closed form, where the method has them: exact, from
+  /// the turning points of the nutation and R as a function of e_Zz (no peak between samples can
+  /// be missed). nullopt for a time-stepper, and after an update() (the run then had two models).
+  virtual std::optional<MotionRange> motion_range() const = 0;
   /// Accepted integration steps since the last reset (a cost measure).
   virtual long steps() const = 0;
 };

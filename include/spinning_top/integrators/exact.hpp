@@ -365,6 +365,64 @@ class ExactSolution {
   /// The state at time t.
   State at(double t) const { return state_of(motion(t)); }
 
+  /// The extremes of the motion over [t0, t] (t >= t0): the largest 1 - u (u = e_Zz = cos tilt),
+  /// and the least R / m. Both depend on the state through u alone (z_G = h u, R = m (g + z_G''),
+  /// header comment, item 4), so over [t0, t] they are extremes of functions of u over the range
+  /// u covers: [u1, u2] once the phase w has passed a turning point of each kind (u = u1 at
+  /// w = 0 mod 2K, u2 at w = K mod 2K), else the values between the ends. R / m = P(v) / (2 D^2),
+  /// least at an end of that range or where d(P / D^2)/dv = (P' D - 2 P D') / D^3 changes sign.
+  /// Nothing is sampled: no peak between two samples is missed.
+  struct Range {
+    double one_minus_u_max = 0.0;            ///< 1 - cos(largest tilt)
+    double least_normal_force_per_mass = 0.0;  ///< [m/s^2]
+  };
+  Range range_until(double t) const {
+    using namespace exact_detail;
+    Range range;
+    if (kind_ == Kind::kSleeping) {  // the axis stays vertical, nothing accelerates: R = m g
+      range.least_normal_force_per_mass = gravity_;
+      return range;
+    }
+    if (kind_ == Kind::kFreeRotation) {
+      // e_Zz = a + rho cos(phi), R / m = g - h w^2 rho cos(phi), phi = w (t - t0) - delta.
+      const double phi0 = -free_delta_, phi1 = free_rate_ * (t - t0_) - free_delta_;
+      const double two_pi = 2.0 * kPi;
+      auto passes = [&](double phase) {  // phi0 <= phase + 2 pi n <= phi1 for some n
+        return std::floor((phi1 - phase) / two_pi) >= std::ceil((phi0 - phase) / two_pi);
+      };
+      const double cos_max = passes(0.0) ? 1.0 : std::max(std::cos(phi0), std::cos(phi1));
+      const double cos_min = passes(kPi) ? -1.0 : std::min(std::cos(phi0), std::cos(phi1));
+      range.one_minus_u_max = free_rho_ == 0.0 ? free_one_minus_a_ : free_one_minus_a_ - free_rho_ * cos_min;
+      range.least_normal_force_per_mass = gravity_ - tip_distance_ * free_rate_ * free_rate_ * free_rho_ * cos_max;
+      return range;
+    }
+    const double quarter = modulus_.quarter_period(), period_w = 2.0 * quarter;
+    const double w1 = std::max(w0_, phase_of_time(t));
+    auto passes = [&](double phase) {  // w0 <= phase + 2K n <= w1 for some n
+      return std::floor((w1 - phase) / period_w) >= std::ceil((w0_ - phase) / period_w);
+    };
+    const bool low = delta_ > 0.0 && passes(0.0), high = delta_ > 0.0 && passes(quarter);
+    // u and 1 - u at the end (1 - u from the Jacobi functions, without cancellation).
+    const double turns = std::floor(w1 / period_w);
+    const Phase end = phase_values(modulus_.at(std::fma(-turns, period_w, w1)));
+    const double v_end = delta_ > 0.0 ? end.v : 0.0;
+    const double v_low = low ? v1_ : std::min(0.0, v_end), v_high = high ? v2_ : std::max(0.0, v_end);
+    range.one_minus_u_max = low ? one_minus_u1_ : std::max(d0_, delta_ > 0.0 ? end.one_minus_u : d0_);
+    const double sin2 = (2.0 - d0_) * d0_;
+    const Polynomial p = normal_force_sign();
+    const Polynomial d = {1.0 + alpha_d_ * sin2, -2.0 * alpha_d_ * u0_, -alpha_d_};  // D(u0 + v)
+    auto per_mass = [&](double v) {
+      const double dv = evaluate(d, v);
+      return evaluate(p, v) / (2.0 * dv * dv);
+    };
+    double least = std::min(per_mass(v_low), per_mass(v_high));
+    const Polynomial slope = subtract(multiply(derivative(p), d), multiply({2.0}, multiply(p, derivative(d))));
+    for (double v : sign_changes(slope, v_low, v_high)) least = std::min(least, per_mass(v));
+    range.least_normal_force_per_mass = least;
+    return range;
+  }
+
+
   static State state_of(const Motion& m) {
     State y;
     y[state_index::kQw] = m.alpha.real();
@@ -391,6 +449,7 @@ class ExactSolution {
     kind_ = Kind::kFreeRotation;
     momentum_world_ = q0_ * Vector3(transverse_ * wx0_, transverse_ * wy0_, axial_ * spin_);
     body_rate_ = (transverse_ - axial_) * spin_ / transverse_;
+    free_one_minus_a_ = 2.0 * (q0_.x() * q0_.x() + q0_.y() * q0_.y());  // 1 - e_Zz while nothing moves
     const double momentum = momentum_world_.norm();
     if (!(momentum > 0.0)) return;  // at rest: nothing moves
     const double rate = momentum / transverse_;
@@ -399,6 +458,7 @@ class ExactSolution {
     const double rho = std::hypot(b, c);
     if (rho == 0.0) return;  // the axis along L, or L vertical: e_Zz and R stay constant
     const double two_pi = 2.0 * exact_detail::kPi, delta = std::atan2(c, b);
+    free_rate_ = rate, free_rho_ = rho, free_delta_ = delta, free_one_minus_a_ = 1.0 - a;
     auto ahead = [&](double phase) {  // the first w t >= 0 at that phase (mod 2 pi)
       phase = std::fmod(phase, two_pi);
       return phase < 0.0 ? phase + two_pi : phase;
@@ -933,6 +993,7 @@ class ExactSolution {
   // Free rotation.
   Vector3 momentum_world_ = Vector3::Zero();
   double body_rate_ = 0.0;
+  double free_rate_ = 0.0, free_rho_ = 0.0, free_delta_ = 0.0, free_one_minus_a_ = 0.0;  // e_Zz = a + rho cos(...)
   // Quadrature: u0, 1 - u0, the cubic's Taylor coefficients about u0 and roots in v = u - u0.
   double u0_ = 1.0, d0_ = 0.0, c_ = 0.0, p0_ = 0.0, f0_ = 0.0, f1_ = 0.0, f2_ = 0.0;
   double v1_ = 0.0, v2_ = 0.0, v3_ = 0.0, delta_ = 0.0;
@@ -1012,6 +1073,12 @@ class ExactDriver : public DriverBase<Model> {
     return "exact";
   }
   const Solution& solution() const { return solution_; }
+  /// The extremes over [start, time()] (ExactSolution::range_until).
+  std::optional<ClosedFormRange> closed_form_range() const {
+    if (!built_) return std::nullopt;
+    const typename Solution::Range range = solution_.range_until(this->t_out_);
+    return ClosedFormRange{range.one_minus_u_max, range.least_normal_force_per_mass};
+  }
   /// Pieces of the interpolated span and how many are built so far (cost diagnostics).
   int interpolation_pieces() const { return table_.pieces(); }
   int built_interpolation_pieces() const { return table_.built_pieces(); }

@@ -1,0 +1,68 @@
+// One case of a parameter sweep: a configuration run to a duration or to its first event,
+// reduced to one row of numbers (issue 11). The Python module's run_case / run_cases and the
+// sweep run this, so that a case is computed by the core alone, without Python per sample.
+#pragma once
+
+#include <string>
+
+#include "spinning_top/simulator.hpp"
+
+namespace spinning_top {
+
+/// Instants t_i = i / rate, i = 0..N, N = floor(duration * rate), each a single division (no
+/// accumulated round-off), plus t = duration when that is not one of them. A relative slack of
+/// 1e-9 absorbs decimal round-off: 1.1 s at 100 Hz is 110.00000000000001 intervals in doubles
+/// and gives 111 instants, not a 112th a few ulps later. `simulate`'s rows and a case's samples.
+class SampleTimes {
+ public:
+  SampleTimes(double duration, double rate);
+  long long count() const { return intervals_ + 1 + (extra_last_ ? 1 : 0); }
+  double at(long long i) const { return i <= intervals_ ? static_cast<double>(i) / rate_ : duration_; }
+
+ private:
+  double duration_, rate_;
+  long long intervals_ = 0;
+  bool extra_last_ = false;
+};
+
+struct CaseSettings {
+  double duration = 10.0;       ///< [s] run until then, or to the first event
+  /// [Hz] for a time-stepper, the states at which the row's extremes and energy balance are
+  /// taken (as `simulate`'s rows; the end state is always one). 1 kHz is the node's tick: 18
+  /// samples per nutation of the toy top. Not used by exact, whose extremes are in closed form
+  /// (Simulator::motion_range) and which is asked for the end state only.
+  double sample_rate = 1000.0;
+  /// Integration steps the case may take (as `simulate --max-steps`); `exact` takes none.
+  double max_steps = 1e8;
+};
+
+/// Throws InvalidParameter("duration" | "sample_rate" | "max_steps", why).
+void validate(const CaseSettings& settings);
+
+/// A case's result. Every number is finite (a case that ends in non_finite reports the last
+/// finite state, as the simulator does).
+struct CaseOutcome {
+  Event event = Event::kNone;    ///< the first event, kNone if the run reached the duration
+  bool out_of_steps = false;     ///< stopped by max_steps before the duration or an event
+  double end_time = 0.0;         ///< [s] the duration, the event's time, or where the steps ran out
+  double min_normal_force = 0.0; ///< [N] least R over the run: exact's closed form, else the samples
+  double max_tilt = 0.0;         ///< [rad] largest angle of the axis from the vertical, likewise
+  double final_tilt = 0.0;       ///< [rad] at end_time
+  double final_energy = 0.0;     ///< [J] E at end_time
+  double friction_work = 0.0;    ///< [J] W, the work done against friction by end_time (viscous)
+  /// max |B(t) - B(0)| / (|B(0)| + m g h) over the samples (exact: at the end), B = E - C wZ^2/2
+  /// + W: the energy balance the monitor guards (events.hpp); round-off for a correct run.
+  double energy_balance_error = 0.0;
+  IntegratorType method = IntegratorType::kAuto;  ///< what ran at the end (never kAuto)
+  bool fallback = false;         ///< auto ran its fallback (exact refused the state)
+  long steps = 0;                ///< accepted integration steps
+};
+
+/// Runs one case. Throws InvalidParameter for an invalid configuration or settings (the
+/// simulator's and validate(CaseSettings)'s refusals, naming the key).
+CaseOutcome run_case(const SceneConfig& config, const CaseSettings& settings);
+
+/// The tilt of an attitude: the angle of the body axis e_Z from the world's vertical [rad].
+double tilt_of(const Quaternion& attitude);
+
+}  // namespace spinning_top

@@ -1,0 +1,166 @@
+// A sweep's case (issue 11): exact's closed-form extremes of the motion (Simulator::motion_range)
+// against a dense sampling of dop853, and run_case's outcome against its definition.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "core_test_support.hpp"
+#include "spinning_top/case_run.hpp"
+
+namespace spinning_top {
+namespace {
+
+using core_test::report;
+
+SceneConfig toy(SceneType scene, double tilt, double spin, IntegratorType method) {
+  SceneConfig c;
+  c.scene = scene;
+  c.initial.tilt = tilt;
+  c.initial.spin = spin;
+  c.initial.precession_rate = 2.0;
+  c.integrator.type = method;
+  c.integrator.tolerance = 1e-13;
+  return c;
+}
+
+/// Least R and largest tilt of dop853's states every dt up to `duration` (or its event).
+MotionRange sampled(SceneConfig c, double duration, double dt) {
+  c.integrator.type = IntegratorType::kDop853;
+  const auto sim = make_simulator(c);
+  MotionRange r{0.0, std::numeric_limits<double>::infinity()};
+  const long n = std::lround(std::ceil(duration / dt));
+  for (long i = 0; i <= n; ++i) {
+    const Event e = sim->advance_to(std::min(i * dt, duration));  // the end itself is a sample
+    const Snapshot s = sim->snapshot();
+    r.max_tilt = std::max(r.max_tilt, tilt_of(s.attitude));
+    r.min_normal_force = std::min(r.min_normal_force, s.outputs.normal_force);
+    if (e != Event::kNone) break;
+  }
+  return r;
+}
+
+// Closed form against 2e5 samples of a 1e-13 dop853 run: the extremes agree to what sampling
+// every 5 us resolves (the toy top nutates at 18 Hz: (2 pi 18 x 5e-6)^2 / 8 ~ 4e-8 of the
+// amplitude, and dop853's own error ~1e-11), and the closed form is never inside the sampled
+// range by more than round-off: samples cannot find a larger tilt or a smaller R.
+TEST(MotionRange, ExactExtremesBoundDenseSamplesOfTheIntegrableScenes) {
+  for (SceneType scene : {SceneType::kFixedTip, SceneType::kFrictionless}) {
+    for (double tilt : {0.05, 0.3, 1.0}) {
+      for (double duration : {0.013, 1.0}) {  // less than one nutation, and many
+        const SceneConfig c = toy(scene, tilt, 150.0, IntegratorType::kExact);
+        const auto sim = make_simulator(c);
+        sim->advance_to(duration);
+        const std::optional<MotionRange> exact = sim->motion_range();
+        ASSERT_TRUE(exact.has_value());
+        const MotionRange dense = sampled(c, duration, 5e-6);
+        const double mg = c.top.mass * c.top.gravity;
+        EXPECT_GE(exact->max_tilt, dense.max_tilt - 1e-10) << to_string(scene) << " tilt " << tilt;
+        EXPECT_NEAR(exact->max_tilt, dense.max_tilt, 1e-7 * tilt) << to_string(scene) << " tilt " << tilt;
+        EXPECT_LE(exact->min_normal_force, dense.min_normal_force + 1e-10 * mg) << to_string(scene);
+        EXPECT_NEAR(exact->min_normal_force, dense.min_normal_force, 1e-6 * mg) << to_string(scene);
+        if (duration == 1.0 && tilt == 0.3)
+          report(scene == SceneType::kFixedTip ? "fixed_tip: exact - sampled least R [N]"
+                                                : "frictionless: exact - sampled least R [N]",
+                 exact->min_normal_force - dense.min_normal_force);
+      }
+    }
+  }
+}
+
+// A torque-free top (g = 0) on the pivot: e_Zz = a + rho cos(w t - delta), R = -m h w^2 rho
+// cos(...): the free-rotation branch of the closed form.
+TEST(MotionRange, TorqueFreeTopMatchesSamples) {
+  SceneConfig c = toy(SceneType::kFixedTip, 0.4, 30.0, IntegratorType::kExact);
+  c.top.gravity = 0.0;
+  c.initial.precession_rate = 0.0;
+  c.initial.nutation_rate = 0.5;
+  const auto sim = make_simulator(c);
+  const Event event = sim->advance_to(2.0);
+  const std::optional<MotionRange> exact = sim->motion_range();
+  ASSERT_TRUE(exact.has_value());
+  const MotionRange dense = sampled(c, sim->time(), 5e-6);
+  EXPECT_NEAR(exact->max_tilt, dense.max_tilt, 1e-8) << to_string(event);
+  EXPECT_NEAR(exact->min_normal_force, dense.min_normal_force, 1e-8);
+}
+
+TEST(MotionRange, NoneForTimeSteppersAndAfterALiveUpdate) {
+  EXPECT_FALSE(make_simulator(toy(SceneType::kFixedTip, 0.3, 150.0, IntegratorType::kDop853))->motion_range());
+  const auto sim = make_simulator(toy(SceneType::kFixedTip, 0.3, 150.0, IntegratorType::kAuto));
+  ASSERT_TRUE(sim->motion_range());
+  TopParameters top = sim->config().top;
+  top.gravity = 9.0;
+  sim->update(top, sim->config().integrator);
+  EXPECT_FALSE(sim->motion_range());  // one closed form would describe only part of the run
+  sim->reset();
+  EXPECT_TRUE(sim->motion_range());
+}
+
+// A spinless top released at 0.3 rad falls: run_case ends at the fall with the tilt at pi/2,
+// the same time and least R as the simulator run to its event.
+TEST(RunCase, EndsAtTheFirstEventWithTheSimulatorsTimeAndState) {
+  const SceneConfig c = toy(SceneType::kFixedTip, 0.3, 0.0, IntegratorType::kAuto);
+  const CaseOutcome o = run_case(c, CaseSettings{});
+  const auto sim = make_simulator(c);
+  const Event event = sim->advance_to(10.0);
+  EXPECT_EQ(o.event, Event::kFallen);
+  EXPECT_EQ(event, Event::kFallen);
+  EXPECT_EQ(o.end_time, sim->time());
+  EXPECT_NEAR(o.max_tilt, M_PI / 2, 1e-12);
+  EXPECT_NEAR(o.final_tilt, M_PI / 2, 1e-12);
+  EXPECT_EQ(o.method, IntegratorType::kExact);
+  EXPECT_LE(o.energy_balance_error, 1e-14);
+}
+
+// A time-stepper's case samples at sample_rate; its extremes are those of the samples.
+TEST(RunCase, TimeStepperExtremesAreThoseOfItsSamples) {
+  SceneConfig c = toy(SceneType::kFixedTip, 0.3, 150.0, IntegratorType::kDop853);
+  CaseSettings settings;
+  settings.duration = 0.5;
+  settings.sample_rate = 1000.0;
+  const CaseOutcome o = run_case(c, settings);
+  const MotionRange dense = sampled(c, 0.5, 1e-3);
+  EXPECT_EQ(o.event, Event::kNone);
+  EXPECT_EQ(o.end_time, 0.5);
+  EXPECT_EQ(o.max_tilt, dense.max_tilt);
+  EXPECT_EQ(o.min_normal_force, dense.min_normal_force);
+  EXPECT_LT(o.energy_balance_error, 1e-10);
+  EXPECT_GT(o.steps, 0);
+}
+
+TEST(RunCase, StopsAtItsStepBudget) {
+  SceneConfig c = toy(SceneType::kViscous, 0.3, 150.0, IntegratorType::kRk4);
+  c.top.friction = 1e-3;
+  c.integrator.step = 1e-5;
+  CaseSettings settings;
+  settings.max_steps = 1000;
+  const CaseOutcome o = run_case(c, settings);
+  EXPECT_TRUE(o.out_of_steps);
+  EXPECT_EQ(o.event, Event::kNone);
+  EXPECT_LE(o.steps, 1000);
+  EXPECT_LT(o.end_time, settings.duration);
+}
+
+TEST(RunCase, RefusesBadSettingsNamingThem) {
+  const SceneConfig c = toy(SceneType::kFixedTip, 0.3, 150.0, IntegratorType::kAuto);
+  for (auto [settings, key] : {std::pair{CaseSettings{-1.0, 1e3, 1e8}, "duration"},
+                               std::pair{CaseSettings{10.0, 0.0, 1e8}, "sample_rate"},
+                               std::pair{CaseSettings{10.0, 1e3, 0.5}, "max_steps"}}) {
+    try {
+      run_case(c, settings);
+      ADD_FAILURE() << key << " accepted";
+    } catch (const InvalidParameter& e) {
+      EXPECT_EQ(e.parameter(), key);
+    }
+  }
+}
+
+TEST(SampleTimes, DecimalDurationsGiveTheirRowCount) {
+  EXPECT_EQ(SampleTimes(1.1, 100.0).count(), 111);  // 110.00000000000001 intervals
+  EXPECT_EQ(SampleTimes(1.005, 100.0).count(), 102);  // 100 intervals and the end
+  EXPECT_EQ(SampleTimes(1.005, 100.0).at(101), 1.005);
+}
+
+}  // namespace
+}  // namespace spinning_top
