@@ -21,7 +21,7 @@ for arg in "$@"; do
 done
 
 # Debian packages (plots need matplotlib): installs what is missing when run as root.
-if [ "$(id -u)" -eq 0 ]; then "$SPINNING_TOP_ROOT/scripts/setup.sh" --bench; fi
+if [ "$(id -u)" -eq 0 ]; then "$SPINNING_TOP_ROOT/scripts/setup.sh"; fi
 
 echo "bench.sh: building the benchmarks in $SPINNING_TOP_BUILD (Release)"
 cmake -S "$SPINNING_TOP_ROOT" -B "$SPINNING_TOP_BUILD" \

@@ -1,8 +1,7 @@
 #!/usr/bin/env bash
 # Installs what the package needs from Debian bookworm's own ROS 1 packages (as root).
-# Usage: scripts/setup.sh [--rviz] [--bench]
+# Usage: scripts/setup.sh [--rviz]
 #   --rviz   also rviz and Xvfb (to watch the top, or take screenshots headless)
-#   --bench  also what the benchmark's plots need (matplotlib)
 set -euo pipefail
 source "$(dirname "$0")/env.sh"
 
@@ -18,12 +17,15 @@ packages=(
   libros-rosgraph-msgs-dev python3-rosgraph-msgs
   libdiagnostic-msgs-dev python3-diagnostic-msgs libdiagnostic-updater-dev
   libdynamic-reconfigure-config-init-mutex-dev python3-dynamic-reconfigure
+  # The Python module and sweeps (python/spinning_top): pybind11, numpy, pandas, scipy (Sobol),
+  # matplotlib (maps), tqdm (progress), Dask (clusters), pytest (their tests).
+  pybind11-dev python3-dev python3-pybind11 python3-setuptools python3-numpy python3-pandas python3-scipy
+  python3-matplotlib python3-tqdm python3-dask python3-distributed python3-pytest
 )
 for arg in "$@"; do
   case "$arg" in
     --rviz) packages+=(rviz xvfb xauth mesa-utils libgl1-mesa-dri imagemagick) ;;
-    --bench) packages+=(python3-matplotlib python3-numpy) ;;
-    *) echo "setup.sh: unknown option '$arg' (use --rviz, --bench)" >&2; exit 2 ;;
+    *) echo "setup.sh: unknown option '$arg' (use --rviz)" >&2; exit 2 ;;
   esac
 done
 

@@ -1,0 +1,56 @@
+"""spinning_top: the symmetric spinning top's core from Python (issue 11).
+
+The physics is the C++ core's (``_core``, pybind11); this package adds nothing to it but
+conveniences and the parameter sweep::
+
+    import spinning_top as st
+    sim = st.Simulator({"scene": "fixed_tip", "initial/tilt": 0.3, "initial/spin": 150})
+    sim.integrator_description()        # 'auto: exact: closed form, ...'
+    traj = sim.run(np.linspace(0, 10, 1001))   # dict of numpy arrays, as `simulate` writes them
+    st.run_case({"scene": "fixed_tip", "initial/spin": 0.0, "initial/tilt": 0.3})
+
+Keys are those of the scene files and of the node's parameters (``parameter_specs()``), values
+numbers or text; every configuration is validated by the core, so a bad one raises
+``InvalidParameter`` with the core's message and the key in ``.key``.
+"""
+from pkgutil import extend_path
+
+# The compiled _core lives in the build's devel space, the .py files in the source tree; a
+# process that finds the source first (a Dask worker spawned with the parent's sys.path) must
+# still find _core on the rest of sys.path, as catkin's devel-space __init__.py does.
+__path__ = extend_path(__path__, __name__)
+
+from spinning_top._core import (  # noqa: F401  (the public API)
+    CaseSettings,
+    InvalidParameter,
+    SceneFileError,
+    Simulator,
+    StepBudgetExceeded,
+    parameter_specs,
+    read_scene_file,
+    run_cases,
+    validate,
+)
+
+
+def load_scene(path, overrides=None):
+    """The keys of a scene file (YAML, read by the core's reader) with `overrides` applied."""
+    keys = dict(read_scene_file(str(path)))
+    keys.update(overrides or {})
+    return keys
+
+
+def simulator_from_file(path, overrides=None):
+    """A Simulator from a scene file, which must give every required key (as `simulate --config`)."""
+    return Simulator(load_scene(path, overrides), require_all=True)
+
+
+def run_case(keys, duration=10.0, sample_rate=1000.0, max_steps=1e8):
+    """Runs one configuration to `duration` or its first event; returns the row as a dict.
+
+    outcome is 'none' (ran to the end), an event ('lift_off', 'fallen', 'energy_drift',
+    'non_finite') or 'out_of_steps'. A configuration the core refuses raises InvalidParameter.
+    """
+    validate(keys)
+    row = run_cases(keys, {}, CaseSettings(duration, sample_rate, max_steps))
+    return {name: (column[0] if len(column) else None) for name, column in row.items()}

@@ -1,0 +1,138 @@
+"""Stability maps of a sweep (issue 11): each case's outcome, and when its event came, over two
+varied keys; the sleeping-top threshold drawn where it applies.
+
+    from spinning_top import stability_map
+    stability_map.plot(rows, "initial/spin", "initial/tilt", "map.png")
+"""
+import math
+
+import numpy as np
+
+from spinning_top import _core
+
+#: Outcome -> (colour, legend label), in legend order.
+OUTCOMES = {
+    "none": ("#4a9c3b", "stays up (no event)"),
+    "lift_off": ("#2f6db5", "lift-off (R reaches 0)"),
+    "fallen": ("#c8423a", "fallen (axis reaches the floor)"),
+    "energy_drift": ("#8e44ad", "energy_drift (numerical)"),
+    "non_finite": ("#000000", "non_finite (numerical)"),
+    "out_of_steps": ("#999999", "out of steps"),
+    "refused": ("#dddddd", "refused by the core"),
+}
+
+
+def _value(base, key):
+    """A key's value in the sweep's base keys, or its documented default."""
+    if key in base:
+        return float(base[key])
+    for spec in _core.parameter_specs():
+        if spec["key"] == key:
+            return float(spec["default"])
+    raise KeyError(key)
+
+
+def sleeping_threshold(base):
+    """omega_crit [rad/s] above which the upright (sleeping) top is stable: C^2 wZ^2 > 4 A' m g h,
+    A' = A0 = A + m h^2 on the pivot, A on the frictionless floor (doc/spec/PHYSICS.md,
+    "Sleeping top"). None for the viscous scene, where friction changes the answer."""
+    scene = str(base.get("scene", "fixed_tip"))
+    m, a, c = _value(base, "mass"), _value(base, "inertia_transverse"), _value(base, "inertia_axial")
+    h, g = _value(base, "tip_distance"), _value(base, "gravity")
+    if scene == "fixed_tip":
+        transverse = a + m * h * h
+    elif scene == "frictionless":
+        transverse = a
+    else:
+        return None
+    return 2.0 * math.sqrt(transverse * m * g * h) / c
+
+
+def _is_grid(rows, x, y):
+    return rows[x].nunique() * rows[y].nunique() == len(rows)
+
+
+def _grid(rows, x, y, values):
+    xs, ys = np.unique(rows[x]), np.unique(rows[y])
+    image = np.full((len(ys), len(xs)), np.nan)
+    image[np.searchsorted(ys, rows[y]), np.searchsorted(xs, rows[x])] = values
+    return xs, ys, image
+
+
+def _edges(centres):
+    if len(centres) == 1:
+        return np.array([centres[0] - 0.5, centres[0] + 0.5])
+    middle = 0.5 * (centres[1:] + centres[:-1])
+    return np.concatenate([[2 * centres[0] - middle[0]], middle, [2 * centres[-1] - middle[-1]]])
+
+
+def plot(rows, x, y, path, title=None):
+    """Writes a PNG of two panels over (x, y): the outcome of each case, and the time of its
+    event (cases without one in grey). A grid design is drawn as cells, a random or Sobol one as
+    points. Where x or y is initial/spin and the other keys of the threshold are fixed, the
+    sleeping-top threshold +-omega_crit is drawn as a line on both panels."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.colors import ListedColormap
+    from matplotlib.patches import Patch
+
+    for key in (x, y):
+        if key not in rows:
+            raise ValueError(f"{key} is not a varied key of this sweep (columns: {', '.join(rows.columns)})")
+    base = rows.attrs.get("base", {})
+    duration = rows.attrs.get("duration")
+    names = list(OUTCOMES)
+    codes = np.array([names.index(o) if o in OUTCOMES else names.index("refused") for o in rows["outcome"]], float)
+    event_time = rows["event_time"].to_numpy(dtype=float)
+
+    fig, (left, right) = plt.subplots(1, 2, figsize=(13, 5.2), constrained_layout=True)
+    outcome_map = ListedColormap([OUTCOMES[n][0] for n in names])
+    grid = _is_grid(rows, x, y)
+    if grid:
+        xs, ys, image = _grid(rows, x, y, codes)
+        left.pcolormesh(_edges(xs), _edges(ys), image, cmap=outcome_map, vmin=-0.5, vmax=len(names) - 0.5)
+        xs, ys, times = _grid(rows, x, y, event_time)
+        right.pcolormesh(_edges(xs), _edges(ys), np.where(np.isnan(times), 0.0, np.nan), cmap=ListedColormap(["#d9d9d9"]))
+        mesh = right.pcolormesh(_edges(xs), _edges(ys), times, cmap="viridis")
+    else:
+        size = max(2.0, min(30.0, 20000.0 / len(rows)))
+        left.scatter(rows[x], rows[y], c=codes, cmap=outcome_map, vmin=-0.5, vmax=len(names) - 0.5, s=size, lw=0)
+        none = np.isnan(event_time)
+        right.scatter(rows[x][none], rows[y][none], c="#d9d9d9", s=size, lw=0)
+        mesh = right.scatter(rows[x][~none], rows[y][~none], c=event_time[~none], cmap="viridis", s=size, lw=0)
+    fig.colorbar(mesh, ax=right, label="event time [s]" + (f" (grey: none within {duration:g} s)" if duration else ""))
+    present = [n for n in names if (rows["outcome"] == n).any()]
+    handles = [Patch(color=OUTCOMES[n][0], label=OUTCOMES[n][1]) for n in present]
+
+    threshold = None
+    threshold_keys = {"mass", "inertia_transverse", "inertia_axial", "tip_distance", "gravity", "scene"}
+    if "initial/spin" in (x, y) and not threshold_keys & set(rows.columns):
+        threshold = sleeping_threshold(base)
+    if threshold is not None:
+        label = "ω_crit = 2√(A₀ m g h)/C" if str(base.get("scene", "fixed_tip")) == "fixed_tip" else "ω_crit = 2√(A m g h)/C"
+        for ax in (left, right):
+            low, high = rows["initial/spin"].min(), rows["initial/spin"].max()
+            for w in (threshold, -threshold):
+                if low <= w <= high:
+                    line = ax.axvline if x == "initial/spin" else ax.axhline
+                    line(w, color="white", lw=2.2)
+                    line(w, color="black", lw=1.0, ls="--")
+        handles.append(plt.Line2D([], [], color="black", ls="--", label=f"{label} = {threshold:.4g} rad/s"))
+    left.legend(handles=handles, loc="upper right", fontsize=8, framealpha=0.9)
+    for ax, what in ((left, "outcome"), (right, "time of the first event")):
+        ax.set_xlabel(_label(x))
+        ax.set_ylabel(_label(y))
+        ax.set_title(what)
+    scene = base.get("scene", "")
+    fig.suptitle(title or f"{scene} top: {len(rows)} cases of {duration:g} s" if duration else title or scene)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def _label(key):
+    for spec in _core.parameter_specs():
+        if spec["key"] == key:
+            return f"{key} [{spec['unit']}]" if spec["unit"] else key
+    return key

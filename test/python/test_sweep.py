@@ -1,0 +1,101 @@
+"""Sweeps (issue 11): designs, rows, refusals, the command line and its map, and Dask."""
+import subprocess
+import sys
+
+import numpy as np
+import pandas as pd
+import pytest
+
+import spinning_top as st
+from spinning_top import sweep
+
+
+def test_grid_design_varies_the_first_key_slowest():
+    cases = sweep.design({"initial/spin": (0, 200, 3), "initial/tilt": [0.1, 0.2]})
+    np.testing.assert_array_equal(cases["initial/spin"], [0, 0, 100, 100, 200, 200])
+    np.testing.assert_array_equal(cases["initial/tilt"], [0.1, 0.2] * 3)
+
+
+@pytest.mark.parametrize("kind", ["random", "sobol"])
+def test_random_designs_are_reproducible_and_in_bounds(kind):
+    a = sweep.design({"initial/spin": (10, 20), "initial/tilt": (0, 1)}, kind, 64, seed=7)
+    b = sweep.design({"initial/spin": (10, 20), "initial/tilt": (0, 1)}, kind, 64, seed=7)
+    c = sweep.design({"initial/spin": (10, 20), "initial/tilt": (0, 1)}, kind, 64, seed=8)
+    np.testing.assert_array_equal(a["initial/spin"], b["initial/spin"])
+    assert not np.array_equal(a["initial/spin"], c["initial/spin"])
+    assert a["initial/spin"].min() >= 10 and a["initial/spin"].max() < 20
+
+
+def test_rows_equal_single_runs_whatever_the_batching():
+    base = {"scene": "fixed_tip", "initial/precession_rate": 0.0}
+    cases = sweep.design({"initial/spin": (0, 200, 9), "initial/tilt": (0, 1.4, 5)})
+    one = sweep.run(base, cases, workers=1, batch_size=45)
+    many = sweep.run(base, cases, workers=2, batch_size=4)
+    pd.testing.assert_frame_equal(one, many, check_exact=True)
+    for i in (0, 13, 44):
+        row = st.run_case({**base, "initial/spin": cases["initial/spin"][i], "initial/tilt": cases["initial/tilt"][i]})
+        for name in ("outcome", "end_time", "min_normal_force", "max_tilt", "final_energy", "method"):
+            assert one[name][i] == row[name] or (pd.isna(one[name][i]) and pd.isna(row[name]))
+
+
+def test_a_bad_key_is_refused_before_running_and_a_bad_case_is_a_row():
+    with pytest.raises(st.InvalidParameter) as refused:
+        sweep.run({"scene": "fixed_tip"}, {"initial/spinn": np.array([1.0, 2.0])})
+    assert refused.value.key == "initial/spinn"
+    assert "did you mean initial/spin?" in str(refused.value)
+    # C > 2A for the second case only: that row is refused, with the core's message.
+    rows = sweep.run({"scene": "fixed_tip"}, {"inertia_axial": np.array([6e-5, 9e-5])})
+    assert list(rows["outcome"]) == ["none", "refused"]
+    assert rows["message"][1].startswith("inertia_axial: C = 9.0000000000000006e-05 exceeds 2A")
+    assert np.isnan(rows["end_time"][1])
+
+
+def test_viscous_rows_sample_the_time_stepper():
+    rows = sweep.run({"scene": "viscous", "friction": 1e-3}, {"initial/spin": np.array([0.0, 150.0])}, duration=1.0)
+    assert list(rows["outcome"]) == ["fallen", "none"]
+    assert (rows["method"] == "dop853").all()
+    assert rows["friction_work"][1] > 0.0
+    assert rows["energy_balance_error"].max() < 1e-9
+
+
+def test_command_line_writes_rows_and_a_map(tmp_path, source_dir):
+    output, picture = tmp_path / "map.csv", tmp_path / "map.png"
+    result = subprocess.run(
+        [sys.executable, "-m", "spinning_top.sweep", "--config", str(source_dir / "config" / "fixed_tip.yaml"),
+         "--vary", "initial/spin=0:200:21", "--vary", "initial/tilt=0:1.4:8", "--output", str(output),
+         "--plot", str(picture), "--no-progress"], capture_output=True, text=True)
+    assert result.returncode == 0, result.stderr
+    rows = pd.read_csv(output)
+    assert len(rows) == 168
+    assert set(rows["outcome"]) == {"none", "fallen"}
+    assert list(rows.columns[:2]) == ["initial/spin", "initial/tilt"]
+    assert picture.stat().st_size > 20000 and picture.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert "sweep: 168 cases:" in result.stderr
+
+
+@pytest.mark.parametrize("arguments, message", [
+    (["--vary", "initial/spinn=0:1:2"], "initial/spinn: unknown key"),
+    (["--vary", "initial/spin=0:1:x"], "--vary initial/spin: expected LOW:HIGH[:N]"),
+    (["--vary", "initial/spin=0:1:2", "--duration", "-1"], "duration: must be a finite number > 0"),
+    (["--vary", "initial/spin=0:1:2", "--output", "rows.parquet"], "Parquet needs pyarrow"),
+])
+def test_command_line_refuses_bad_input(tmp_path, source_dir, arguments, message):
+    result = subprocess.run([sys.executable, "-m", "spinning_top.sweep", "--config",
+                             str(source_dir / "config" / "fixed_tip.yaml"), "--no-progress", *arguments],
+                            capture_output=True, text=True, cwd=tmp_path)
+    assert result.returncode != 0
+    assert message in result.stderr
+
+
+def test_dask_local_cluster_gives_the_local_rows_bit_for_bit():
+    from distributed import Client, LocalCluster
+
+    base = {"scene": "frictionless", "initial/precession_rate": 0.0}
+    cases = sweep.design({"initial/spin": (0, 200), "initial/tilt": (0, 1.4)}, "sobol", 256, seed=1)
+    local = sweep.run(base, cases)
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster, \
+            Client(cluster) as client:
+        remote = sweep.run(base, cases, scheduler=client, batch_size=16)
+        assert len(client.nthreads()) == 2
+    pd.testing.assert_frame_equal(local, remote, check_exact=True)
+    assert local.to_csv(index=False) == remote.to_csv(index=False)
