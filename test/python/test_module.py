@@ -179,3 +179,22 @@ def test_exact_rows_keep_the_energy_balance_to_round_off():
                                                           "sobol", 64, seed=3))
     assert (rows["method"] == "exact").all()
     assert rows["energy_balance_error"].max() < 1e-13
+
+
+@pytest.mark.parametrize("scene", ["fixed_tip", "frictionless"])
+@pytest.mark.parametrize("fraction", [0.5, 0.69, 0.72, 0.8, 0.95])
+def test_released_near_upright_below_the_threshold_the_top_nutates_to_the_cubics_root(scene, fraction):
+    # Released at rest (apart from spin) at u0 = cos(tilt) -> 1, the cubic f(u) = (1 - u) [2 m g h
+    # (1 - u^2)/A' - C^2 wZ^2 (1 - u)/A'^2] has its lower root at 1 + u1 = 2 (wZ / w_crit)^2:
+    # below w_crit the upright top is unstable, but it reaches the floor (u1 <= 0) only below
+    # w_crit / sqrt(2); above, it swings down to acos(2 (wZ / w_crit)^2 - 1) and back.
+    from spinning_top import stability_map
+    critical = stability_map.sleeping_threshold({**TOY, "scene": scene})
+    row = st.run_case({**TOY, "scene": scene, "initial/spin": fraction * critical, "initial/tilt": 1e-6})
+    lowest = 2 * fraction ** 2 - 1
+    if lowest <= 0:
+        assert row["outcome"] == "fallen"
+    else:
+        assert row["outcome"] == "none"
+        # The release 1e-6 rad off the vertical moves the root by O(1e-12).
+        assert row["max_tilt"] == pytest.approx(math.acos(lowest), abs=1e-9)
