@@ -14,6 +14,7 @@ from spinning_top import _core
 OUTCOMES = {
     "none": ("#4a9c3b", "stays up (no event)"),
     "lift_off": ("#2f6db5", "lift-off (R reaches 0)"),
+    "at_release": ("#9ecae1", "invalid at release (R < 0 or axis below the floor at t = 0)"),
     "fallen": ("#c8423a", "fallen (axis reaches the floor)"),
     "energy_drift": ("#8e44ad", "energy_drift (numerical)"),
     "non_finite": ("#000000", "non_finite (numerical)"),
@@ -84,7 +85,11 @@ def plot(rows, x, y, path, title=None):
     base = rows.attrs.get("base", {})
     duration = rows.attrs.get("duration")
     names = list(OUTCOMES)
-    codes = np.array([names.index(o) if o in OUTCOMES else names.index("refused") for o in rows["outcome"]], float)
+    # A state the model refuses from the start (the floor would have to pull the tip at release)
+    # is told apart from a lift-off that the motion reaches.
+    shown = np.where((rows["end_time"] == 0.0) & rows["outcome"].isin(["lift_off", "fallen"]), "at_release",
+                     rows["outcome"])
+    codes = np.array([names.index(o) if o in OUTCOMES else names.index("refused") for o in shown], float)
     event_time = rows["event_time"].to_numpy(dtype=float)
 
     fig, (left, right) = plt.subplots(1, 2, figsize=(13, 5.2), constrained_layout=True)
@@ -103,7 +108,7 @@ def plot(rows, x, y, path, title=None):
         right.scatter(rows[x][none], rows[y][none], c="#d9d9d9", s=size, lw=0)
         mesh = right.scatter(rows[x][~none], rows[y][~none], c=event_time[~none], cmap="viridis", s=size, lw=0)
     fig.colorbar(mesh, ax=right, label="event time [s]" + (f" (grey: none within {duration:g} s)" if duration else ""))
-    present = [n for n in names if (rows["outcome"] == n).any()]
+    present = [n for n in names if (shown == n).any()]
     handles = [Patch(color=OUTCOMES[n][0], label=OUTCOMES[n][1]) for n in present]
 
     threshold = None
@@ -120,7 +125,7 @@ def plot(rows, x, y, path, title=None):
                     line(w, color="white", lw=2.2)
                     line(w, color="black", lw=1.0, ls="--")
         handles.append(plt.Line2D([], [], color="black", ls="--", label=f"{label} = {threshold:.4g} rad/s"))
-    left.legend(handles=handles, loc="upper right", fontsize=8, framealpha=0.9)
+    left.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, -0.13), ncol=2, fontsize=8, frameon=False)
     for ax, what in ((left, "outcome"), (right, "time of the first event")):
         ax.set_xlabel(_label(x))
         ax.set_ylabel(_label(y))
