@@ -52,7 +52,7 @@ def main():
         print(text, flush=True)
         lines.append(text)
 
-    cores = os.cpu_count() or 1
+    cores = len(os.sched_getaffinity(0)) or 1
     say(f"Measured by `bench/sweep_throughput.py`{' --quick' if QUICK else ''} on {cores} cores "
         f"({platform.processor() or platform.machine()}), Release build, default settings (`integrator: auto`, "
         "duration 10 s, time-steppers sampled at 1 kHz). Cases are random tops of each range (seed 11).")

@@ -130,7 +130,8 @@ def run(base, cases, duration=10.0, sample_rate=1000.0, max_steps=1e8, scheduler
     InvalidParameter before anything runs; a case the core refuses for its own values (C > 2A
     somewhere in a sweep of C) is a row with outcome "refused" and the core's message.
     scheduler: None for this machine's cores (threads: the core runs without the GIL), or a
-    Dask scheduler address or distributed.Client. workers: local threads (default: all cores).
+    Dask scheduler address or distributed.Client. workers: local threads (default: every core
+    this process may run on).
     """
     import pandas as pd
 
@@ -147,7 +148,7 @@ def run(base, cases, duration=10.0, sample_rate=1000.0, max_steps=1e8, scheduler
     if client is not None:
         workers = max(1, sum(client.nthreads().values()))
     else:
-        workers = workers or os.cpu_count() or 1
+        workers = workers or len(os.sched_getaffinity(0)) or 1  # the cores this process may use
     spans = _batches(count, workers, batch_size)
     bar = _progress_bar(count, progress)
     results = [None] * len(spans)

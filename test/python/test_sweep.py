@@ -88,7 +88,13 @@ def test_command_line_refuses_bad_input(tmp_path, source_dir, arguments, message
 
 
 def test_dask_local_cluster_gives_the_local_rows_bit_for_bit():
+    import faulthandler
+
     from distributed import Client, LocalCluster
+
+    # A cluster that cannot start (a worker failing to import the module) would otherwise wait
+    # for its workers until CI's limit: fail after 120 s with every thread's stack instead.
+    faulthandler.dump_traceback_later(120, exit=True)
 
     base = {"scene": "frictionless", "initial/precession_rate": 0.0}
     cases = sweep.design({"initial/spin": (0, 200), "initial/tilt": (0, 1.4)}, "sobol", 256, seed=1)
@@ -97,5 +103,6 @@ def test_dask_local_cluster_gives_the_local_rows_bit_for_bit():
             Client(cluster) as client:
         remote = sweep.run(base, cases, scheduler=client, batch_size=16)
         assert len(client.nthreads()) == 2
+    faulthandler.cancel_dump_traceback_later()
     pd.testing.assert_frame_equal(local, remote, check_exact=True)
     assert local.to_csv(index=False) == remote.to_csv(index=False)
