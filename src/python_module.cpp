@@ -90,6 +90,9 @@ py::dict run_trajectory(Simulator& simulator, const py::array_t<double, py::arra
   const py::ssize_t n = t.shape(0);
   for (py::ssize_t i = 1; i < n; ++i)
     if (!(t(i) > t(i - 1))) throw py::value_error("times must be increasing");
+  // A row is the state at its time: a time the run has passed has no state to show.
+  if (n > 0 && !(t(0) >= simulator.time()))
+    throw py::value_error("times must start at or after the simulator's time (" + exact_text(simulator.time()) + " s)");
   std::vector<double> time, attitude, rates, com, com_velocity, contact, contact_force, normal_force, energy, work, tilt;
   auto push3 = [](std::vector<double>& v, const Eigen::Vector3d& x) { v.insert(v.end(), x.data(), x.data() + 3); };
   Event event = simulator.event();

@@ -96,6 +96,16 @@ def test_step_budget_stops_a_run():
     assert sim.steps <= 1000
 
 
+def test_run_refuses_times_it_cannot_show():
+    sim = st.Simulator({"scene": "fixed_tip", "initial/tilt": 0.3, "initial/spin": 150})
+    with pytest.raises(ValueError, match="increasing"):
+        sim.run([0.0, 0.2, 0.1])
+    sim.advance_to(1.0)
+    with pytest.raises(ValueError, match="at or after"):
+        sim.run([0.5, 1.5])
+    assert sim.run([1.0, 1.5])["time"].tolist() == [1.0, 1.5]
+
+
 def test_integrator_description_and_choice():
     sim = st.Simulator({"scene": "viscous", "friction": 1e-3})
     assert sim.integrator_description().startswith("auto: dop853")
