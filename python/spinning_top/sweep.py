@@ -67,6 +67,9 @@ def design(ranges, kind="grid", cases=None, seed=0):
                 if int(n) != n or n < 1:
                     raise ValueError(f"{key}: a grid axis needs a whole number of points >= 1, got {n}")
                 axes.append(np.linspace(float(low), float(high), int(n)))
+            elif isinstance(spec, tuple) and len(spec) == 2:
+                raise ValueError(f"{key}: a grid axis is (low, high, n) (LOW:HIGH:N) or a list of values; "
+                                 "(low, high) is a range of a random or sobol design")
             else:
                 axes.append(np.asarray(spec, dtype=float).ravel())
         mesh = np.meshgrid(*axes, indexing="ij")

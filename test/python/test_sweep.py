@@ -76,6 +76,8 @@ def test_command_line_writes_rows_and_a_map(tmp_path, source_dir):
 @pytest.mark.parametrize("arguments, message", [
     (["--vary", "initial/spinn=0:1:2"], "initial/spinn: unknown key"),
     (["--vary", "initial/spin=0:1:x"], "--vary initial/spin: expected LOW:HIGH[:N]"),
+    (["--vary", "initial/spin=0:200"], "initial/spin: a grid axis is (low, high, n)"),
+    (["--vary", "initial/spin=0:200:5", "--design", "sobol", "--cases", "8"], "a sobol axis is (low, high)"),
     (["--vary", "initial/spin=0:1:2", "--duration", "-1"], "duration: must be a finite number > 0"),
     (["--vary", "initial/spin=0:1:2", "--output", "rows.parquet"], "Parquet needs pyarrow"),
 ])
