@@ -67,9 +67,10 @@ def _edges(centres):
     return np.concatenate([[2 * centres[0] - middle[0]], middle, [2 * centres[-1] - middle[-1]]])
 
 
-def plot(rows, x, y, path, title=None):
-    """Writes a PNG of two panels over (x, y): the outcome of each case, and the time of its
-    event (cases without one in grey). A grid design is drawn as cells, a random or Sobol one as
+def plot(rows, x, y, path, title=None, value="event_time"):
+    """Writes a PNG of two panels over (x, y): the outcome of each case, and `value`, a numeric
+    column of the rows (default the time of its event; cases without a value in grey; e.g.
+    final_tilt shows how friction raises or lowers the axis). A grid design is drawn as cells, a random or Sobol one as
     points. Where x or y is initial/spin and the other keys of the threshold are fixed, the
     sleeping-top threshold +-omega_crit is drawn as a line on both panels."""
     import matplotlib
@@ -90,7 +91,9 @@ def plot(rows, x, y, path, title=None):
     shown = np.where((rows["end_time"] == 0.0) & rows["outcome"].isin(["lift_off", "fallen"]), "at_release",
                      rows["outcome"])
     codes = np.array([names.index(o) if o in OUTCOMES else names.index("refused") for o in shown], float)
-    event_time = rows["event_time"].to_numpy(dtype=float)
+    if value not in rows or rows[value].dtype.kind not in "fiub":
+        raise ValueError(f"--value {value}: not a numeric column of the rows")
+    shade = rows[value].to_numpy(dtype=float)
 
     fig, (left, right) = plt.subplots(1, 2, figsize=(13, 5.2), constrained_layout=True)
     outcome_map = ListedColormap([OUTCOMES[n][0] for n in names])
@@ -98,16 +101,23 @@ def plot(rows, x, y, path, title=None):
     if grid:
         xs, ys, image = _grid(rows, x, y, codes)
         left.pcolormesh(_edges(xs), _edges(ys), image, cmap=outcome_map, vmin=-0.5, vmax=len(names) - 0.5)
-        xs, ys, times = _grid(rows, x, y, event_time)
-        right.pcolormesh(_edges(xs), _edges(ys), np.where(np.isnan(times), 0.0, np.nan), cmap=ListedColormap(["#d9d9d9"]))
-        mesh = right.pcolormesh(_edges(xs), _edges(ys), times, cmap="viridis")
+        xs, ys, shades = _grid(rows, x, y, shade)
+        right.pcolormesh(_edges(xs), _edges(ys), np.where(np.isnan(shades), 0.0, np.nan), cmap=ListedColormap(["#d9d9d9"]))
+        mesh = right.pcolormesh(_edges(xs), _edges(ys), shades, cmap="viridis")
     else:
         size = max(2.0, min(30.0, 20000.0 / len(rows)))
         left.scatter(rows[x], rows[y], c=codes, cmap=outcome_map, vmin=-0.5, vmax=len(names) - 0.5, s=size, lw=0)
-        none = np.isnan(event_time)
+        none = np.isnan(shade)
         right.scatter(rows[x][none], rows[y][none], c="#d9d9d9", s=size, lw=0)
-        mesh = right.scatter(rows[x][~none], rows[y][~none], c=event_time[~none], cmap="viridis", s=size, lw=0)
-    fig.colorbar(mesh, ax=right, label="event time [s]" + (f" (grey: none within {duration:g} s)" if duration else ""))
+        mesh = right.scatter(rows[x][~none], rows[y][~none], c=shade[~none], cmap="viridis", s=size, lw=0)
+    if value == "event_time":
+        label = "event time [s]" + (f" (grey: none within {duration:g} s)" if duration else "")
+    else:
+        from spinning_top.sweep import OUTCOME_COLUMNS
+
+        unit = OUTCOME_COLUMNS.get(value, "").split("]")[0] + "]" if OUTCOME_COLUMNS.get(value, "").startswith("[") else ""
+        label = (f"{value} {unit}" if unit else _label(value)) + (" (grey: none)" if np.isnan(shade).any() else "")
+    fig.colorbar(mesh, ax=right, label=label)
     present = [n for n in names if (shown == n).any()]
     handles = [Patch(color=OUTCOMES[n][0], label=OUTCOMES[n][1]) for n in present]
 
@@ -126,7 +136,7 @@ def plot(rows, x, y, path, title=None):
                     line(w, color="black", lw=1.0, ls="--")
         handles.append(plt.Line2D([], [], color="black", ls="--", label=f"{label} = {threshold:.4g} rad/s"))
     left.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, -0.13), ncol=2, fontsize=8, frameon=False)
-    for ax, what in ((left, "outcome"), (right, "time of the first event")):
+    for ax, what in ((left, "outcome"), (right, "time of the first event" if value == "event_time" else value)):
         ax.set_xlabel(_label(x))
         ax.set_ylabel(_label(y))
         ax.set_title(what)

@@ -244,6 +244,8 @@ def main(argv=None):
     parser.add_argument("--max-steps", type=float, default=1e8, help="integration steps a case may take (default 1e8)")
     parser.add_argument("--output", help="rows as .csv or .parquet (default: CSV on stdout)")
     parser.add_argument("--plot", help="stability map as PNG (outcome and event time over --x and --y)")
+    parser.add_argument("--value", default="event_time",
+                        help="numeric column shown in the map's second panel (default event_time; e.g. final_tilt)")
     parser.add_argument("--x", help="key on the map's x axis (default: the first --vary)")
     parser.add_argument("--y", help="key on the map's y axis (default: the second --vary)")
     parser.add_argument("--scheduler", help="Dask scheduler address (tcp://host:8786); default: this machine's cores")
@@ -269,6 +271,17 @@ def main(argv=None):
         ranges = dict(_parse_vary(v) for v in args.vary)
         cases = design(ranges, args.design, args.cases, args.seed)
         _core.validate({**base, **{k: float(v[0]) for k, v in cases.items()}}, require_all=True)
+        if args.plot:  # checked before the sweep runs, not after
+            keys = list(cases)
+            x, y = args.x or keys[0], args.y or (keys[1] if len(keys) > 1 else None)
+            if y is None:
+                raise ValueError("--plot needs two keys: vary a second key or give --y")
+            for option, key in (("--x", x), ("--y", y)):
+                if key not in cases:
+                    raise ValueError(f"{option} {key}: not a varied key ({', '.join(keys)})")
+            numeric = [c for c in OUTCOME_COLUMNS if c not in ("outcome", "method", "message")] + keys
+            if args.value not in numeric:
+                raise ValueError(f"--value {args.value}: not a numeric column ({', '.join(numeric)})")
         rows = run(base, cases, args.duration, args.sample_rate, args.max_steps, args.scheduler, args.workers,
                    args.batch_size, progress=not args.no_progress)
     except (ValueError, _core.InvalidParameter) as error:
@@ -280,12 +293,7 @@ def main(argv=None):
     if args.plot:
         from spinning_top import stability_map
 
-        keys = list(cases)
-        x = args.x or keys[0]
-        y = args.y or (keys[1] if len(keys) > 1 else None)
-        if y is None:
-            return fail("--plot needs two keys: vary a second key or give --y")
-        stability_map.plot(rows, x, y, args.plot)
+        stability_map.plot(rows, x, y, args.plot, value=args.value)
     summary = rows["outcome"].value_counts().to_dict()
     print(f"sweep: {len(rows)} cases: " + ", ".join(f"{v} {k}" for k, v in summary.items()), file=sys.stderr)
     return 0

@@ -50,12 +50,18 @@ def test_a_bad_key_is_refused_before_running_and_a_bad_case_is_a_row():
     assert np.isnan(rows["end_time"][1])
 
 
-def test_viscous_rows_sample_the_time_stepper():
+def test_viscous_rows_sample_the_time_stepper(tmp_path):
     rows = sweep.run({"scene": "viscous", "friction": 1e-3}, {"initial/spin": np.array([0.0, 150.0])}, duration=1.0)
     assert list(rows["outcome"]) == ["fallen", "none"]
     assert (rows["method"] == "dop853").all()
     assert rows["friction_work"][1] > 0.0
     assert rows["energy_balance_error"].max() < 1e-9
+    # A map of another column than the event time (a random design: drawn as points).
+    from spinning_top import stability_map
+    cases = sweep.design({"friction": (1e-4, 1e-2), "initial/spin": (100, 200)}, "random", 6, seed=2)
+    rows = sweep.run({"scene": "viscous"}, cases, duration=0.2)
+    stability_map.plot(rows, "friction", "initial/spin", tmp_path / "tilt.png", value="final_tilt")
+    assert (tmp_path / "tilt.png").read_bytes()[:4] == b"\x89PNG"
 
 
 def test_command_line_writes_rows_and_a_map(tmp_path, source_dir):
@@ -80,6 +86,10 @@ def test_command_line_writes_rows_and_a_map(tmp_path, source_dir):
     (["--vary", "initial/spin=0:200:5", "--design", "sobol", "--cases", "8"], "a sobol axis is (low, high)"),
     (["--vary", "initial/spin=0:1:2", "--duration", "-1"], "duration: must be a finite number > 0"),
     (["--vary", "initial/spin=0:1:2", "--output", "rows.parquet"], "Parquet needs pyarrow"),
+    (["--vary", "initial/spin=0:1:2", "--vary", "initial/tilt=0:1:2", "--plot", "m.png", "--value", "method"],
+     "--value method: not a numeric column"),
+    (["--vary", "initial/spin=0:1:2", "--vary", "initial/tilt=0:1:2", "--plot", "m.png", "--x", "mass"],
+     "--x mass: not a varied key"),
 ])
 def test_command_line_refuses_bad_input(tmp_path, source_dir, arguments, message):
     result = subprocess.run([sys.executable, "-m", "spinning_top.sweep", "--config",
