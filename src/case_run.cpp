@@ -57,8 +57,7 @@ CaseOutcome run_case(const SceneConfig& config, const CaseSettings& settings) {
 
   Event event = simulator->event();  // an initial state that already violates the model
   auto advance = [&](double t) {
-    const double remaining = std::max(0.0, settings.max_steps - static_cast<double>(simulator->steps()));
-    event = simulator->advance_to(t, WorkBudget::steps(static_cast<long>(remaining)));
+    event = simulator->advance_to(t, WorkBudget::steps_left(settings.max_steps, simulator->steps()));
     s = simulator->snapshot();
     take(s);
     if (event == Event::kNone && simulator->time() < t) outcome.out_of_steps = true;

@@ -77,11 +77,6 @@ class StepBudgetExceeded : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-WorkBudget step_budget(const Simulator& simulator, double max_steps) {
-  if (!std::isfinite(max_steps)) return WorkBudget::unlimited();
-  return WorkBudget::steps(static_cast<long>(std::max(0.0, max_steps - static_cast<double>(simulator.steps()))));
-}
-
 /// The trajectory at `times` (increasing), as simulate writes it: stops at the first event,
 /// whose row has the event's time. Columns of equal length; "event" names the event or is "".
 py::dict run_trajectory(Simulator& simulator, const py::array_t<double, py::array::c_style | py::array::forcecast>& times,
@@ -101,7 +96,7 @@ py::dict run_trajectory(Simulator& simulator, const py::array_t<double, py::arra
     py::gil_scoped_release release;
     for (py::ssize_t i = 0; i < n; ++i) {
       if (i > 0 && event != Event::kNone) break;
-      event = simulator.advance_to(t(i), step_budget(simulator, max_steps));
+      event = simulator.advance_to(t(i), WorkBudget::steps_left(max_steps, simulator.steps()));
       if (event == Event::kNone && simulator.time() < t(i)) break;
       const Snapshot s = simulator.snapshot();
       time.push_back(event == Event::kNone ? t(i) : s.time);
@@ -278,7 +273,7 @@ PYBIND11_MODULE(_core, m) {
             Event event;
             {
               py::gil_scoped_release release;
-              event = s.advance_to(t, step_budget(s, max_steps));
+              event = s.advance_to(t, WorkBudget::steps_left(max_steps, s.steps()));
             }
             return std::string(to_string(event));
           },

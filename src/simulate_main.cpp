@@ -306,8 +306,7 @@ Event run(Simulator& simulator, const SampleTimes& times, double max_steps, std:
   write_row(out, 0.0, simulator.snapshot(), event);
   for (long long i = 1; i < times.count() && event == Event::kNone; ++i) {
     const double t = times.at(i);
-    const long remaining = static_cast<long>(std::max(0.0, max_steps - static_cast<double>(simulator.steps())));
-    event = simulator.advance_to(t, WorkBudget::steps(remaining));
+    event = simulator.advance_to(t, WorkBudget::steps_left(max_steps, simulator.steps()));
     if (event == Event::kNone && simulator.time() < t) {
       char where[160];
       std::snprintf(where, sizeof where, " (at t = %.9g s of %.9g s)", simulator.time(), times.at(times.count() - 1));

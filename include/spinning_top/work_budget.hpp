@@ -5,6 +5,7 @@
 // it stopped, so results never depend on where (or whether) a budget ran out.
 #pragma once
 
+#include <algorithm>
 #include <chrono>
 #include <limits>
 
@@ -23,6 +24,13 @@ struct WorkBudget {
     WorkBudget budget;
     budget.max_steps = n;
     return budget;
+  }
+  /// The next call's share of a run's allowance of max_steps steps (a whole number; infinity or
+  /// anything beyond a long: no limit) of which `taken` are spent: the run stops where its
+  /// allowance ends, whichever call that falls in.
+  static WorkBudget steps_left(double max_steps, long taken) {
+    if (!(max_steps < static_cast<double>(std::numeric_limits<long>::max()))) return unlimited();
+    return steps(static_cast<long>(std::max(0.0, max_steps - static_cast<double>(taken))));
   }
   static WorkBudget until(Clock::time_point deadline) {
     WorkBudget budget;
