@@ -408,9 +408,7 @@ class ExactSolution {
     const double v_end = delta_ > 0.0 ? end.v : 0.0;
     const double v_low = low ? v1_ : std::min(0.0, v_end), v_high = high ? v2_ : std::max(0.0, v_end);
     range.one_minus_u_max = low ? one_minus_u1_ : std::max(d0_, delta_ > 0.0 ? end.one_minus_u : d0_);
-    const double sin2 = (2.0 - d0_) * d0_;
-    const Polynomial p = normal_force_sign();
-    const Polynomial d = {1.0 + alpha_d_ * sin2, -2.0 * alpha_d_ * u0_, -alpha_d_};  // D(u0 + v)
+    const Polynomial p = normal_force_sign(), d = inertia_factor();
     auto per_mass = [&](double v) {
       const double dv = evaluate(d, v);
       return evaluate(p, v) / (2.0 * dv * dv);
@@ -933,13 +931,18 @@ class ExactSolution {
     return m;
   }
 
+  /// D(u0 + v) = 1 + alpha_D (1 - u^2) as a polynomial in v = u - u0 (1 for the fixed tip).
+  exact_detail::Polynomial inertia_factor() const {
+    const double sin2 = (2.0 - d0_) * d0_;
+    return {1.0 + alpha_d_ * sin2, -2.0 * alpha_d_ * u0_, -alpha_d_};
+  }
+
   /// The polynomial with the sign of R: P(v) = 2 g D^2 + h (f' D - f D') in v = u - u0
   /// (R = m P / (2 D^2), header comment).
   exact_detail::Polynomial normal_force_sign() const {
     using namespace exact_detail;
     const Polynomial f = {f0_, f1_, f2_, kappa_};
-    const double sin2 = (2.0 - d0_) * d0_;
-    const Polynomial d = {1.0 + alpha_d_ * sin2, -2.0 * alpha_d_ * u0_, -alpha_d_};  // D(u0 + v)
+    const Polynomial d = inertia_factor();
     const Polynomial df = derivative(f), dd = derivative(d);
     Polynomial p = multiply({2.0 * gravity_}, multiply(d, d));
     const Polynomial force = subtract(multiply(df, d), multiply(f, dd));
