@@ -70,8 +70,8 @@ def _edges(centres):
 def plot(rows, x, y, path, title=None, value="event_time"):
     """Writes a PNG of two panels over (x, y): the outcome of each case, and `value`, a numeric
     column of the rows (default the time of its event; cases without a value in grey; e.g.
-    final_tilt shows how friction raises or lowers the axis). A grid design is drawn as cells, a random or Sobol one as
-    points. Where x or y is initial/spin and the other keys of the threshold are fixed, the
+    final_tilt shows how friction raises or lowers the axis). A grid design is drawn as cells, a
+    random or Sobol one as points. Where x or y is initial/spin and the other keys of the threshold are fixed, the
     sleeping-top threshold +-omega_crit is drawn as a line on both panels."""
     import matplotlib
 
@@ -113,10 +113,7 @@ def plot(rows, x, y, path, title=None, value="event_time"):
     if value == "event_time":
         label = "event time [s]" + (f" (grey: none within {duration:g} s)" if duration else "")
     else:
-        from spinning_top.sweep import OUTCOME_COLUMNS
-
-        unit = OUTCOME_COLUMNS.get(value, "").split("]")[0] + "]" if OUTCOME_COLUMNS.get(value, "").startswith("[") else ""
-        label = (f"{value} {unit}" if unit else _label(value)) + (" (grey: none)" if np.isnan(shade).any() else "")
+        label = _label(value) + (" (grey: none)" if np.isnan(shade).any() else "")
     fig.colorbar(mesh, ax=right, label=label)
     present = [n for n in names if (shown == n).any()]
     handles = [Patch(color=OUTCOMES[n][0], label=OUTCOMES[n][1]) for n in present]
@@ -147,7 +144,11 @@ def plot(rows, x, y, path, title=None, value="event_time"):
 
 
 def _label(key):
+    """A configuration key or an outcome column with its unit, e.g. "initial/spin [rad/s]"."""
+    from spinning_top.sweep import OUTCOME_COLUMNS  # its descriptions start with the unit
+
     for spec in _core.parameter_specs():
         if spec["key"] == key:
             return f"{key} [{spec['unit']}]" if spec["unit"] else key
-    return key
+    description = OUTCOME_COLUMNS.get(key, "")
+    return f"{key} {description.split(']')[0]}]" if description.startswith("[") else key
