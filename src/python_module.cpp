@@ -72,6 +72,13 @@ py::dict snapshot_dict(const Snapshot& s) {
   return d;
 }
 
+/// A run's step allowance from Python: a whole number >= 1, or inf (the default) for no limit.
+double checked_max_steps(double max_steps) {
+  if (!(max_steps >= 1.0 && (max_steps == std::floor(max_steps) || std::isinf(max_steps))))
+    throw py::value_error("max_steps: must be a whole number >= 1, or inf for no limit, got " + exact_text(max_steps));
+  return max_steps;
+}
+
 class StepBudgetExceeded : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;
@@ -81,6 +88,7 @@ class StepBudgetExceeded : public std::runtime_error {
 /// whose row has the event's time. Columns of equal length; "event" names the event or is "".
 py::dict run_trajectory(Simulator& simulator, const py::array_t<double, py::array::c_style | py::array::forcecast>& times,
                         double max_steps) {
+  checked_max_steps(max_steps);
   const auto t = times.unchecked<1>();
   const py::ssize_t n = t.shape(0);
   for (py::ssize_t i = 1; i < n; ++i)
@@ -270,6 +278,7 @@ PYBIND11_MODULE(_core, m) {
       .def(
           "advance_to",
           [](Simulator& s, double t, double max_steps) {
+            checked_max_steps(max_steps);
             Event event;
             {
               py::gil_scoped_release release;

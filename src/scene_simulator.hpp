@@ -9,6 +9,7 @@
 #include <cmath>
 #include <memory>
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <utility>
 
@@ -41,7 +42,12 @@ class SceneSimulator final : public Simulator {
   }
 
   using Simulator::advance_to;
-  Event advance_to(double t, const WorkBudget& budget) override { return driver_.advance_to(model_, t, budget); }
+  Event advance_to(double t, const WorkBudget& budget) override {
+    // A front end's bad request, not physics: exact would evaluate its closed form at t = inf
+    // and a stepper would never arrive (found through the Python module's advance_to(inf)).
+    if (!std::isfinite(t)) throw std::invalid_argument("advance_to: the target time must be finite, got " + std::to_string(t));
+    return driver_.advance_to(model_, t, budget);
+  }
   double time() const override { return driver_.time(); }
   Event event() const override { return driver_.event(); }
 

@@ -9,6 +9,8 @@
 
 #include <cmath>
 #include <cstring>
+#include <limits>
+#include <stdexcept>
 #include <vector>
 
 #include "core_test_support.hpp"
@@ -107,6 +109,25 @@ TEST(WorkBudget, PastDeadlineStillTakesAStep) {
 // rk4 at 0.99 of the largest step validate() accepts (2 / fastest rate): |R(i omega dt)| ~ 0.75,
 // the nutation's energy is lost within a few steps. The run must stop with energy_drift, at a
 // state whose balance is within the documented tolerance.
+// A request for t = inf or NaN is a front end's error: refused with nothing changed, for the
+// closed form (which would evaluate at t = inf) and a stepper alike.
+TEST(AdvanceTo, NonFiniteTargetIsRefusedAndChangesNothing) {
+  for (IntegratorType method : {IntegratorType::kAuto, IntegratorType::kDop853, IntegratorType::kRk4}) {
+    InitialConditions initial;
+    initial.tilt = 0.3;
+    initial.spin = 150.0;
+    SceneConfig c = fixed_step(SceneType::kFixedTip, initial, 1e-3);
+    c.integrator.type = method;
+    const auto sim = make_simulator(c);
+    for (double t : {std::numeric_limits<double>::infinity(), std::numeric_limits<double>::quiet_NaN()})
+      EXPECT_THROW(sim->advance_to(t), std::invalid_argument) << to_string(method);
+    EXPECT_EQ(sim->time(), 0.0);
+    EXPECT_EQ(sim->event(), Event::kNone);
+    EXPECT_EQ(sim->advance_to(0.5), Event::kNone);
+    EXPECT_EQ(sim->time(), 0.5);
+  }
+}
+
 TEST(EnergyBalance, DivergingStepStopsWithEnergyDrift) {
   for (SceneType scene : {SceneType::kFixedTip, SceneType::kFrictionless, SceneType::kViscous}) {
     SceneConfig config = with_integrator(scene, IntegratorType::kRk4, 1e-10, 1.0);

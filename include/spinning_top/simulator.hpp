@@ -120,7 +120,8 @@ class Simulator {
   virtual ~Simulator() = default;
 
   /// Advances the simulation to time t [s] (no-op for t <= time()). Stops early at the first
-  /// validity event, which it returns (then time() is the event time); kNone otherwise.
+  /// validity event, which it returns (then time() is the event time); kNone otherwise. Throws
+  /// std::invalid_argument for a non-finite t.
   Event advance_to(double t) { return advance_to(t, WorkBudget::unlimited()); }
   /// The same within a work budget (work_budget.hpp): if it runs out first, returns kNone with
   /// time() < t and snapshot() still at time(); call again with the same t to go on. The states

@@ -106,6 +106,23 @@ def test_run_refuses_times_it_cannot_show():
     assert sim.run([1.0, 1.5])["time"].tolist() == [1.0, 1.5]
 
 
+@pytest.mark.parametrize("integrator", ["auto", "dop853"])
+def test_non_finite_times_and_bad_step_allowances_are_refused(integrator):
+    sim = st.Simulator({"scene": "fixed_tip", "initial/tilt": 0.3, "initial/spin": 150, "integrator": integrator})
+    for t in (math.inf, math.nan):
+        with pytest.raises(ValueError, match="target time must be finite"):
+            sim.advance_to(t)
+    with pytest.raises(ValueError, match="must be increasing|start at or after"):
+        sim.run([0.0, math.nan])
+    with pytest.raises(ValueError, match="target time must be finite"):
+        sim.run([0.0, math.inf])
+    for steps in (0, -1, 2.5, math.nan):
+        with pytest.raises(ValueError, match="max_steps: must be a whole number >= 1"):
+            sim.advance_to(1.0, max_steps=steps)
+    assert sim.time == 0.0 and sim.event == ""  # nothing moved
+    assert sim.advance_to(1.0) == "" and sim.time == 1.0
+
+
 def test_integrator_description_and_choice():
     sim = st.Simulator({"scene": "viscous", "friction": 1e-3})
     assert sim.integrator_description().startswith("auto: dop853")
