@@ -26,13 +26,13 @@
 
 namespace spinning_top {
 
-/// Common state of a driver: the reported time and state, and the event that ended the run.
 /// The extremes of a motion since its start, where a method knows them in closed form.
 struct ClosedFormRange {
   double one_minus_cos_max_tilt = 0.0;       ///< 1 - e_Zz at the largest tilt
   double least_normal_force_per_mass = 0.0;  ///< least R / m [m/s^2]
 };
 
+/// Common state of a driver: the reported time and state, and the event that ended the run.
 template <class Model>
 class DriverBase {
  public:
