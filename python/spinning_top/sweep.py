@@ -228,8 +228,8 @@ def main(argv=None):
         description="Runs a scene over a grid or a random or Sobol sample of its keys, one row per case "
                     "(the outcome, event time, least R, largest tilt, energy balance, method), and draws a "
                     "stability map. Each case runs in the C++ core to --duration or its first event.",
-        epilog="Example (the README's map): sweep --config config/fixed_tip.yaml --vary initial/spin=0:200:101 "
-               "--vary initial/tilt=0:1.4:71 --set initial/precession_rate=0 --output map.csv --plot map.png")
+        epilog="Example (the README's map): sweep --config config/fixed_tip.yaml --vary initial/spin=0:200:201 "
+               "--vary initial/tilt=0:1.4:141 --output map.csv --plot map.png")
     parser.add_argument("--config", required=True, help="scene file (YAML), e.g. config/fixed_tip.yaml")
     parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                         help="overrides one key of the scene file for every case (repeatable)")
