@@ -80,6 +80,39 @@ inline Vector3 initial_body_rates(const InitialConditions& ic) {
                  ic.precession_rate * st * cp - ic.nutation_rate * sp, ic.spin);
 }
 
+/// The Euler angles of an attitude (q = Rz(heading) Rx(tilt) Rz(spin_angle), as in
+/// initial_attitude) and their rates from the body rates (inverting initial_body_rates:
+/// phidot sin(theta) = omega_X sin(psi) + omega_Y cos(psi), thetadot = omega_X cos(psi) -
+/// omega_Y sin(psi)). Upright (sin(theta) < 1e-12) heading and spin angle are one angle and
+/// the precession rate is undefined: it is 0, and the spin angle points the nutation rate
+/// along the horizontal body rate. tilt lies in [0, pi], the angles in (-pi, pi].
+struct EulerState {
+  double heading = 0.0, tilt = 0.0, spin_angle = 0.0;                 ///< phi, theta, psi [rad]
+  double precession_rate = 0.0, nutation_rate = 0.0, spin = 0.0;     ///< phidot, thetadot, omega_Z [rad/s]
+};
+
+inline EulerState euler_state(const Quaternion& attitude, const Vector3& body_rates) {
+  const Eigen::Matrix3d r = attitude.normalized().toRotationMatrix();
+  EulerState e;
+  const double sin_tilt = std::hypot(r(0, 2), r(1, 2));
+  e.tilt = std::atan2(sin_tilt, r(2, 2));
+  e.spin = body_rates.z();
+  if (sin_tilt < 1e-12) {
+    // Upright the attitude is Rz(phi + psi): a horizontal body rate tilts the axis at thetadot
+    // = its size, in the direction psi = atan2(-omega_Y, omega_X) sets; phi takes the rest.
+    e.nutation_rate = std::hypot(body_rates.x(), body_rates.y());
+    e.spin_angle = e.nutation_rate > 0.0 ? std::atan2(-body_rates.y(), body_rates.x()) : 0.0;
+    e.heading = std::remainder(std::atan2(r(1, 0), r(0, 0)) - e.spin_angle, 2.0 * M_PI);
+    return e;
+  }
+  e.heading = std::atan2(r(0, 2), -r(1, 2));     // e_Z = (sin t sin phi, -sin t cos phi, cos t)
+  e.spin_angle = std::atan2(r(2, 0), r(2, 1));   // row 3 of Rz Rx Rz: (sin t sin psi, sin t cos psi, cos t)
+  const double sp = std::sin(e.spin_angle), cp = std::cos(e.spin_angle);
+  e.precession_rate = (body_rates.x() * sp + body_rates.y() * cp) / sin_tilt;
+  e.nutation_rate = body_rates.x() * cp - body_rates.y() * sp;
+  return e;
+}
+
 /// Writes the attitude and transverse rates of the initial conditions into y[0..5].
 template <class State>
 void set_initial_attitude_and_rates(const InitialConditions& ic, State& y) {
