@@ -10,7 +10,9 @@ packages=(
   catkin ros-core-dev python3-catkin-pkg python3-rospkg python3-rostest python3-rosunit
   python3-roslaunch python3-rosbag librosbag-dev rosbash
   libeigen3-dev libboost-dev libyaml-cpp-dev libgtest-dev googletest
-  libtf2-ros-dev libtf2-eigen-dev python3-tf2-msgs
+  ros-message-generation ros-message-runtime python3-genmsg python3-gencpp python3-genpy
+  python3-rospy python3-std-msgs
+  libtf2-ros-dev libtf2-eigen-dev python3-tf2-msgs python3-tf2-ros
   libgeometry-msgs-dev python3-geometry-msgs
   libvisualization-msgs-dev python3-visualization-msgs
   libstd-srvs-dev python3-std-srvs

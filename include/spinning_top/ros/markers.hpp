@@ -1,0 +1,27 @@
+// What rviz draws of a top: its body (a cone with the top's C/A), a handle, the tip's trace on
+// the floor and the floor's force as an arrow.
+#pragma once
+
+#include <ros/time.h>
+#include <visualization_msgs/MarkerArray.h>
+
+#include <deque>
+#include <string>
+
+#include "spinning_top/simulator.hpp"
+
+namespace spinning_top {
+namespace ros_front_end {
+
+struct MarkerFrames {
+  std::string world, body;
+};
+
+/// `contact_point` and `force` (horizontal x, y and R as z) in the world frame; `trace` holds
+/// earlier contact points (world).
+visualization_msgs::MarkerArray top_markers(const TopParameters& top, const Vector3& contact_point,
+                                            const Vector3& force, const std::deque<Vector3>& trace,
+                                            const MarkerFrames& frames, double force_scale, const ros::Time& stamp);
+
+}  // namespace ros_front_end
+}  // namespace spinning_top

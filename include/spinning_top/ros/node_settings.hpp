@@ -1,0 +1,64 @@
+// The node's own private parameters (not scene keys): pacing, frames, publication rates,
+// diagnostics thresholds. One table of keys with their defaults and checks (node_settings.cpp).
+#pragma once
+
+#include <ros/node_handle.h>
+
+#include <string>
+#include <vector>
+
+namespace spinning_top {
+namespace ros_front_end {
+
+struct NodeSettings {
+  double rate = 1000.0;             ///< ticks per simulated second [Hz]
+  double real_time_factor = 1.0;    ///< simulated s per wall s; 0 = as fast as possible
+  /// [wall s] missed ticks are taken late (catch-up) up to this lag; beyond it they are given
+  /// up (reported), so that an overloaded machine does not fall ever further behind
+  double max_lag = 1.0;
+  bool publish_clock = true;        ///< publish /clock (for use_sim_time users)
+  double clock_rate = 0.0;          ///< /clock messages per simulated second [Hz]; 0 = every tick
+  double tf_rate = 0.0;             ///< /tf messages per simulated second [Hz]; 0 = every tick
+  bool start_paused = false;
+  std::string world_frame = "world";
+  std::string body_frame = "top";
+  std::string contact_frame = "contact";
+  /// [s] wall time one timer callback (or ~step) may integrate; a tick that needs more goes on
+  /// in the next callback, and diagnostics report it (ERROR)
+  double tick_budget = 0.05;
+  double marker_rate = 30.0;        ///< markers per simulated second [Hz]
+  int trace_length = 2000;          ///< points kept in the tip's trace
+  double trace_resolution = 1e-4;   ///< [m] the trace gets a point when the tip moved this far
+  double force_scale = 0.05;        ///< [m/N] arrow length per newton
+  double energy_drift_warning = 1e-6;  ///< relative |E + W - E0| / |E0| for WARN
+  double energy_drift_error = 1e-3;    ///< ... and for ERROR
+  double quaternion_norm_error = 1e-9; ///< | |q| - 1 | for ERROR
+  double constraint_error = 1e-9;      ///< [m] contact constraint residual for ERROR
+  /// Pacing diagnostics over each 1 s window: WARN when more than this fraction of the ticks
+  /// were taken late (catch-up), or when the achieved real-time factor is below
+  /// real_time_factor_warning x the requested one
+  double late_tick_warning = 0.1;
+  double real_time_factor_warning = 0.9;
+  /// Names of the tops to start with, each reading its keys from ~<name>/ over the node's own
+  /// (~tops: [slow, fast]); empty: one top from the node's own keys, with the unprefixed names
+  std::vector<std::string> tops;
+};
+
+/// Every private key the node itself reads (besides the scene keys of parameter_specs()).
+const std::vector<std::string>& node_setting_keys();
+
+/// Reads and validates NodeSettings; throws InvalidParameter naming the key.
+NodeSettings read_node_settings(const ros::NodeHandle& private_nh);
+
+/// The pacing keys, checked alike at start and by dynamic_reconfigure: throws InvalidParameter.
+void validate_pacing(double rate, double real_time_factor);
+
+/// A frame id tf2, URDF and rviz all handle: throws InvalidParameter naming `key`.
+void require_frame(const std::string& key, const std::string& frame);
+
+/// A top's name: one ROS name segment (a letter, then letters, digits, '_'); throws
+/// InvalidParameter naming `key`.
+void require_top_name(const std::string& key, const std::string& name);
+
+}  // namespace ros_front_end
+}  // namespace spinning_top

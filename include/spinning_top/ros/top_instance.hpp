@@ -1,0 +1,93 @@
+// One simulated top in the node (turtlesim's turtle.cpp): its simulator, its place on the
+// floor, its frames, topics, markers, event and diagnostics. The world (spinning_top_node.hpp)
+// owns the clock and calls advance() and publish() at every tick for every top.
+#pragma once
+
+#include <diagnostic_updater/DiagnosticStatusWrapper.h>
+#include <geometry_msgs/TransformStamped.h>
+#include <ros/ros.h>
+
+#include <deque>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "spinning_top/ros/node_settings.hpp"
+#include "spinning_top/simulator.hpp"
+
+namespace spinning_top {
+namespace ros_front_end {
+
+class TopInstance {
+ public:
+  /// `name` "" is the node's own top: frames <body_frame>, <contact_frame> and topics ~/...;
+  /// a named top has frames <name>/<body_frame>, <name>/<contact_frame> and topics ~<name>/....
+  /// Its simulated time 0 is the world's `world_time`; its tip starts at `tip_xy` on the floor.
+  /// Throws InvalidParameter (nothing advertised) if the configuration is invalid.
+  TopInstance(std::string name, const SceneConfig& config, const Eigen::Vector2d& tip_xy,
+              const NodeSettings& settings, ros::NodeHandle private_nh, double world_time);
+
+  const std::string& name() const { return name_; }
+  const Simulator& simulator() const { return *simulator_; }
+  /// What ~reset and ~<name>/reset come back to (the last start, set_state or reload).
+  const SceneConfig& start_config() const { return start_config_; }
+  const std::string& body_frame() const { return body_frame_; }
+  const std::string& contact_frame() const { return contact_frame_; }
+
+  /// Advances to the world's simulated time; false if the budget ran out first (call again
+  /// with the same time). A validity event is logged and published on the latched ~event.
+  bool advance(double world_time, const WorkBudget& budget);
+  /// The tick's transforms world -> body (and world -> contact unless it is static).
+  void append_transforms(const ros::Time& stamp, std::vector<geometry_msgs::TransformStamped>& out) const;
+  /// The fixed tip's contact frame never moves: it goes once on /tf_static.
+  bool contact_is_static() const { return start_config_.scene == SceneType::kFixedTip; }
+  geometry_msgs::TransformStamped contact_transform(const ros::Time& stamp) const;
+  /// The tick's topics: contact point, floor force, twist, state (and markers when asked).
+  /// Returns false (nothing published) for a non-finite state, which the core promises never happens.
+  bool publish(const ros::Time& stamp, bool with_markers);
+
+  /// Back to start_config() at the world's time (its simulated time restarts at 0).
+  void reset(double world_time);
+  /// A new start (set_state, reload): validated first; throws InvalidParameter and changes nothing.
+  void restart(const SceneConfig& config, const Eigen::Vector2d& tip_xy, double world_time);
+  /// Live changes of k, g and the integrator settings, keeping the state (Simulator::update).
+  /// Throws InvalidParameter and changes nothing; returns true if auto switched its method.
+  bool update(const TopParameters& top, const IntegratorSettings& integrator);
+  /// Live changes of the body (m, A, C, h) and of the spin omega_Z, from the current state: the
+  /// attitude, the other rates, the tip's place and the simulated time go on. Refused (throws
+  /// InvalidParameter, nothing changes) for an invalid body or state, or after a validity event.
+  void change_body(const TopParameters& top, double spin, double world_time);
+  /// The tip's position on the floor now [m].
+  Eigen::Vector2d tip_xy() const;
+
+  void diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) const;
+  Event event() const { return simulator_->event(); }
+
+ private:
+  /// Replaces the simulator (validated first) and rebaselines the energy.
+  void start(const SceneConfig& config, double time_base, double world_time);
+  void handle_event(Event event);
+  void rebaseline_energy();
+  /// The core's position in the world frame (the top's place on the floor added).
+  Vector3 world(const Vector3& core_position) const { return core_position + offset_; }
+
+  std::string name_;
+  NodeSettings settings_;
+  std::string body_frame_, contact_frame_;
+  SceneConfig start_config_;
+  Eigen::Vector2d start_tip_xy_ = Eigen::Vector2d::Zero();
+  std::unique_ptr<Simulator> simulator_;
+  Vector3 offset_ = Vector3::Zero();  // the core's origin in the world frame (on the floor)
+  double origin_ = 0.0;     // [s] world time of the simulator's time 0
+  double time_base_ = 0.0;  // [s] the top's time at the simulator's time 0 (live body changes)
+  double energy_baseline_ = 0.0;
+  Event reported_event_ = Event::kNone;
+  double event_time_ = 0.0;
+  std::deque<Vector3> trace_;
+  ros::NodeHandle nh_;  // ~ or ~<name>
+  ros::Publisher contact_point_publisher_, normal_force_publisher_, twist_publisher_, state_publisher_,
+      marker_publisher_, event_publisher_;
+};
+
+}  // namespace ros_front_end
+}  // namespace spinning_top

@@ -1,0 +1,149 @@
+#include "spinning_top/ros/node_settings.hpp"
+
+#include <xmlrpcpp/XmlRpcValue.h>
+
+#include <cctype>
+#include <cmath>
+#include <cstdio>
+#include <set>
+
+#include "spinning_top/parameters.hpp"
+#include "spinning_top/ros/ros_parameters.hpp"
+
+namespace spinning_top {
+namespace ros_front_end {
+namespace {
+
+constexpr double kMaxRate = 100000.0;  // [Hz] beyond this the tick cost alone exceeds the period
+// Beyond it the timer period 1 / (rate x factor) falls below 0.1 us at 1 kHz: "as fast as
+// possible" is 0, and a huge finite factor (1e300) asked for a period of 1e-303 s.
+constexpr double kMaxRealTimeFactor = 1e4;
+
+std::string format(const char* pattern, double value) {
+  char buffer[160];
+  std::snprintf(buffer, sizeof buffer, pattern, value);
+  return buffer;
+}
+
+void require(bool condition, const std::string& key, const std::string& reason) {
+  if (!condition) throw InvalidParameter(key, reason);
+}
+
+bool name_characters(const std::string& name, bool allow_slash) {
+  if (name.empty() || !std::isalpha(static_cast<unsigned char>(name[0]))) return false;
+  for (const char c : name)
+    if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_' || (allow_slash && c == '/'))) return false;
+  return true;
+}
+
+/// A publication rate key: 0 (every tick) or a positive rate.
+double read_publication_rate(const ros::NodeHandle& nh, const std::string& key, double value) {
+  value = read_number(nh, key, value);
+  require(std::isfinite(value) && value >= 0.0, key, "must be >= 0 Hz (0: every tick)");
+  return value;
+}
+
+std::vector<std::string> read_top_names(const ros::NodeHandle& nh) {
+  XmlRpc::XmlRpcValue value;
+  std::vector<std::string> names;
+  if (!nh.getParam("tops", value)) return names;
+  require(value.getType() == XmlRpc::XmlRpcValue::TypeArray, "tops", "must be a list of names, e.g. [slow, fast]");
+  std::set<std::string> seen;
+  for (int i = 0; i < value.size(); ++i) {
+    require(value[i].getType() == XmlRpc::XmlRpcValue::TypeString, "tops", "must be a list of names, e.g. [slow, fast]");
+    const std::string name = static_cast<std::string>(value[i]);
+    require_top_name("tops", name);
+    require(seen.insert(name).second, "tops", "'" + name + "' is listed twice");
+    names.push_back(name);
+  }
+  return names;
+}
+
+}  // namespace
+
+const std::vector<std::string>& node_setting_keys() {
+  static const std::vector<std::string> keys = {
+      "rate", "real_time_factor", "max_lag", "tick_budget", "publish_clock", "clock_rate", "tf_rate",
+      "start_paused", "world_frame", "body_frame", "contact_frame", "marker_rate", "trace_length",
+      "trace_resolution", "force_scale", "energy_drift_warning", "energy_drift_error", "quaternion_norm_error",
+      "constraint_error", "late_tick_warning", "real_time_factor_warning", "tops"};
+  return keys;
+}
+
+void validate_pacing(double rate, double real_time_factor) {
+  require(std::isfinite(rate) && rate > 0.0 && rate <= kMaxRate, "rate", format("must lie in (0, %g] Hz", kMaxRate));
+  require(std::isfinite(real_time_factor) && real_time_factor >= 0.0 && real_time_factor <= kMaxRealTimeFactor,
+          "real_time_factor", format("must lie in [0, %g] (0 = as fast as possible)", kMaxRealTimeFactor));
+}
+
+void require_frame(const std::string& key, const std::string& frame) {
+  require(!frame.empty(), key, "must not be empty");
+  require(frame[0] != '/', key, "'" + frame + "' must not start with '/' (tf2 frame ids have no leading slash)");
+  // ROS names' characters (a letter first, then letters, digits, '_' and '/' between names): what
+  // tf2, URDF and rviz handle everywhere; a space or a '-' breaks tools that parse frame lists.
+  require(name_characters(frame, true) && frame.back() != '/' && frame.find("//") == std::string::npos, key,
+          "'" + frame + "' is not a valid frame id: a letter, then letters, digits, '_' and '/' "
+          "between names (REP-105 names such as world, top)");
+}
+
+void require_top_name(const std::string& key, const std::string& name) {
+  require(name_characters(name, false), key,
+          "'" + name + "' is not a valid top name: a letter, then letters, digits and '_' (it prefixes the "
+          "top's frames, topics and services)");
+}
+
+NodeSettings read_node_settings(const ros::NodeHandle& nh) {
+  NodeSettings s;
+  s.rate = read_number(nh, "rate", s.rate);
+  s.real_time_factor = read_number(nh, "real_time_factor", s.real_time_factor);
+  validate_pacing(s.rate, s.real_time_factor);
+  s.max_lag = read_number(nh, "max_lag", s.max_lag);
+  require(std::isfinite(s.max_lag) && s.max_lag >= 0.0 && s.max_lag <= 3600.0, "max_lag",
+          "must lie in [0, 3600] wall s (how far behind the wall clock missed ticks are still taken)");
+  s.tick_budget = read_number(nh, "tick_budget", s.tick_budget);
+  require(std::isfinite(s.tick_budget) && s.tick_budget >= 1e-4 && s.tick_budget <= 1.0, "tick_budget",
+          "must lie in [1e-4, 1] s (the wall time one callback may integrate before the node serves "
+          "services, parameter updates and SIGINT again)");
+  s.publish_clock = read_bool(nh, "publish_clock", s.publish_clock);
+  s.clock_rate = read_publication_rate(nh, "clock_rate", s.clock_rate);
+  s.tf_rate = read_publication_rate(nh, "tf_rate", s.tf_rate);
+  s.start_paused = read_bool(nh, "start_paused", s.start_paused);
+  s.world_frame = read_string(nh, "world_frame", s.world_frame);
+  s.body_frame = read_string(nh, "body_frame", s.body_frame);
+  s.contact_frame = read_string(nh, "contact_frame", s.contact_frame);
+  require_frame("world_frame", s.world_frame);
+  require_frame("body_frame", s.body_frame);
+  require_frame("contact_frame", s.contact_frame);
+  require(s.body_frame != s.world_frame && s.contact_frame != s.world_frame && s.contact_frame != s.body_frame,
+          "body_frame", "world_frame, body_frame and contact_frame must differ");
+  s.marker_rate = read_number(nh, "marker_rate", s.marker_rate);
+  require(std::isfinite(s.marker_rate) && s.marker_rate > 0.0, "marker_rate", "must be > 0 Hz");
+  const double trace_length = read_number(nh, "trace_length", s.trace_length);
+  require(trace_length >= 0.0 && trace_length <= 1e6 && trace_length == std::floor(trace_length), "trace_length",
+          "must be a whole number of points in [0, 1e6]");
+  s.trace_length = static_cast<int>(trace_length);
+  s.trace_resolution = read_number(nh, "trace_resolution", s.trace_resolution);
+  require(std::isfinite(s.trace_resolution) && s.trace_resolution >= 0.0, "trace_resolution", "must be >= 0 m");
+  s.force_scale = read_number(nh, "force_scale", s.force_scale);
+  require(std::isfinite(s.force_scale) && s.force_scale > 0.0, "force_scale", "must be > 0 m/N");
+  s.energy_drift_warning = read_number(nh, "energy_drift_warning", s.energy_drift_warning);
+  s.energy_drift_error = read_number(nh, "energy_drift_error", s.energy_drift_error);
+  require(s.energy_drift_warning > 0.0 && std::isfinite(s.energy_drift_warning), "energy_drift_warning", "must be > 0");
+  require(s.energy_drift_error >= s.energy_drift_warning && std::isfinite(s.energy_drift_error), "energy_drift_error",
+          "must be finite and >= energy_drift_warning");
+  s.quaternion_norm_error = read_number(nh, "quaternion_norm_error", s.quaternion_norm_error);
+  require(s.quaternion_norm_error > 0.0, "quaternion_norm_error", "must be > 0");
+  s.constraint_error = read_number(nh, "constraint_error", s.constraint_error);
+  require(s.constraint_error > 0.0, "constraint_error", "must be > 0 m");
+  s.late_tick_warning = read_number(nh, "late_tick_warning", s.late_tick_warning);
+  require(s.late_tick_warning >= 0.0 && s.late_tick_warning <= 1.0, "late_tick_warning",
+          "must lie in [0, 1] (a fraction of the ticks in a 1 s window)");
+  s.real_time_factor_warning = read_number(nh, "real_time_factor_warning", s.real_time_factor_warning);
+  require(s.real_time_factor_warning >= 0.0 && s.real_time_factor_warning <= 1.0, "real_time_factor_warning",
+          "must lie in [0, 1] (a fraction of the requested real-time factor)");
+  s.tops = read_top_names(nh);
+  return s;
+}
+
+}  // namespace ros_front_end
+}  // namespace spinning_top

@@ -1,0 +1,312 @@
+#include "spinning_top/ros/top_instance.hpp"
+
+#include <geometry_msgs/PointStamped.h>
+#include <geometry_msgs/TwistStamped.h>
+#include <geometry_msgs/WrenchStamped.h>
+#include <std_msgs/String.h>
+#include <visualization_msgs/MarkerArray.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "spinning_top/TopState.h"
+#include "spinning_top/kinematics.hpp"
+#include "spinning_top/ros/markers.hpp"
+
+namespace spinning_top {
+namespace ros_front_end {
+namespace {
+
+bool finite(const Snapshot& s) {
+  const ModelOutputs& o = s.outputs;
+  return std::isfinite(s.time) && s.attitude.coeffs().allFinite() && s.body_rates.allFinite() &&
+         o.center_of_mass.allFinite() && o.center_of_mass_velocity.allFinite() && o.contact_point.allFinite() &&
+         o.contact_force.allFinite() && std::isfinite(o.normal_force) && std::isfinite(o.energy) &&
+         std::isfinite(o.dissipated_energy);
+}
+
+geometry_msgs::Point to_point(const Vector3& v) {
+  geometry_msgs::Point p;
+  p.x = v.x();
+  p.y = v.y();
+  p.z = v.z();
+  return p;
+}
+
+geometry_msgs::Vector3 to_vector(const Vector3& v) {
+  geometry_msgs::Vector3 p;
+  p.x = v.x();
+  p.y = v.y();
+  p.z = v.z();
+  return p;
+}
+
+/// What diagnostics and the state message report of the numerics.
+struct Monitors {
+  double energy_balance, quaternion_norm_error, constraint_residual;
+};
+
+Monitors monitors(const Snapshot& s, const SceneConfig& config, double energy_baseline) {
+  const ModelOutputs& out = s.outputs;
+  Monitors m;
+  // Energy balance E + W - E0 (W: work done against friction; 0 without friction).
+  m.energy_balance = (out.energy + out.dissipated_energy - energy_baseline) / std::max(std::abs(energy_baseline), 1e-300);
+  m.quaternion_norm_error = std::abs(s.attitude.norm() - 1.0);
+  // Contact constraint z_G = h e_Zz (PHYSICS.md), and the pivot at the origin (fixed tip).
+  const Vector3 axis = s.attitude * Vector3::UnitZ();
+  double constraint = std::abs(out.center_of_mass.z() - config.top.tip_distance * axis.z());
+  constraint = std::max(constraint, std::abs(out.contact_point.z()));
+  if (config.scene == SceneType::kFixedTip) constraint = std::max(constraint, out.contact_point.head<2>().norm());
+  m.constraint_residual = constraint;
+  return m;
+}
+
+std::string event_name(Event event) { return event == Event::kNone ? "" : to_string(event); }
+
+}  // namespace
+
+TopInstance::TopInstance(std::string name, const SceneConfig& config, const Eigen::Vector2d& tip_xy,
+                         const NodeSettings& settings, ros::NodeHandle private_nh, double world_time)
+    : name_(std::move(name)),
+      settings_(settings),
+      body_frame_(name_.empty() ? settings.body_frame : name_ + "/" + settings.body_frame),
+      contact_frame_(name_.empty() ? settings.contact_frame : name_ + "/" + settings.contact_frame),
+      nh_(name_.empty() ? private_nh : ros::NodeHandle(private_nh, name_)) {
+  restart(config, tip_xy, world_time);  // validates before anything is advertised
+  contact_point_publisher_ = nh_.advertise<geometry_msgs::PointStamped>("contact_point", 100);
+  normal_force_publisher_ = nh_.advertise<geometry_msgs::WrenchStamped>("normal_force", 100);
+  twist_publisher_ = nh_.advertise<geometry_msgs::TwistStamped>("twist", 100);
+  state_publisher_ = nh_.advertise<spinning_top::TopState>("state", 100);
+  marker_publisher_ = nh_.advertise<visualization_msgs::MarkerArray>("markers", 10);
+  event_publisher_ = nh_.advertise<std_msgs::String>("event", 1, /*latch=*/true);
+}
+
+void TopInstance::start(const SceneConfig& config, double time_base, double world_time) {
+  std::unique_ptr<Simulator> simulator = make_simulator(config);  // validates; throws InvalidParameter
+  simulator_ = std::move(simulator);
+  time_base_ = time_base;
+  origin_ = world_time;
+  rebaseline_energy();
+}
+
+void TopInstance::restart(const SceneConfig& config, const Eigen::Vector2d& tip_xy, double world_time) {
+  if (!tip_xy.allFinite() || tip_xy.norm() > 1e6)
+    throw InvalidParameter("x", "the tip's position must be finite and within 1e6 m of the origin");
+  start(config, 0.0, world_time);
+  start_config_ = config;
+  start_tip_xy_ = tip_xy;
+  const Vector3 tip = simulator_->snapshot().outputs.contact_point;
+  offset_ = Vector3(tip_xy.x() - tip.x(), tip_xy.y() - tip.y(), 0.0);
+  trace_.clear();
+  if (reported_event_ != Event::kNone && event_publisher_) {
+    std_msgs::String cleared;  // "": no event (the core's spelling of none)
+    event_publisher_.publish(cleared);
+  }
+  reported_event_ = Event::kNone;
+}
+
+void TopInstance::reset(double world_time) { restart(start_config_, start_tip_xy_, world_time); }
+
+Eigen::Vector2d TopInstance::tip_xy() const {
+  return world(simulator_->snapshot().outputs.contact_point).head<2>();
+}
+
+bool TopInstance::update(const TopParameters& top, const IntegratorSettings& integrator) {
+  const bool switched = simulator_->update(top, integrator);  // validates; changes nothing if it throws
+  start_config_.top.friction = top.friction;
+  start_config_.top.gravity = top.gravity;
+  start_config_.integrator = integrator;
+  rebaseline_energy();
+  return switched;
+}
+
+void TopInstance::change_body(const TopParameters& top, double spin, double world_time) {
+  if (simulator_->event() != Event::kNone)
+    throw InvalidParameter("mass", std::string("the top stopped at its ") + to_string(simulator_->event()) +
+                                       " event: reset it before changing its body");
+  const Snapshot now = simulator_->snapshot();
+  const EulerState e = euler_state(now.attitude, now.body_rates);
+  SceneConfig config = simulator_->config();
+  config.top = top;
+  config.initial = InitialConditions{};
+  config.initial.heading = e.heading;
+  config.initial.tilt = e.tilt;
+  config.initial.spin_angle = e.spin_angle;
+  config.initial.precession_rate = e.precession_rate;
+  config.initial.nutation_rate = e.nutation_rate;
+  config.initial.spin = spin;
+  if (config.scene == SceneType::kViscous) {
+    config.initial.velocity_x = now.outputs.center_of_mass_velocity.x();
+    config.initial.velocity_y = now.outputs.center_of_mass_velocity.y();
+  }
+  SceneConfig new_start = start_config_;
+  new_start.top = top;
+  new_start.initial.spin = spin;
+  validate(new_start);  // ~reset must still work with the new body
+  const Vector3 tip = world(now.outputs.contact_point);
+  start(config, time_base_ + simulator_->time(), world_time);  // validates the state with the new body
+  start_config_ = new_start;
+  // The tip stays where it is: the new model's origin moves under it.
+  const Vector3 new_tip = simulator_->snapshot().outputs.contact_point;
+  offset_ = Vector3(tip.x() - new_tip.x(), tip.y() - new_tip.y(), 0.0);
+}
+
+bool TopInstance::advance(double world_time, const WorkBudget& budget) {
+  if (simulator_->event() != Event::kNone) return true;  // stopped: the frozen pose goes on being published
+  const double target = world_time - origin_;
+  const Event event = simulator_->advance_to(target, budget);
+  if (event == Event::kNone && simulator_->time() < target) return false;  // out of budget
+  if (event != Event::kNone) handle_event(event);
+  return true;
+}
+
+void TopInstance::handle_event(Event event) {
+  reported_event_ = event;
+  event_time_ = time_base_ + simulator_->time();
+  ROS_ERROR("spinning_top: %s%s%s at t = %.9g s (simulated): integration stopped; the last valid pose is "
+            "kept. Call ~reset (or ~set_state) to start again.",
+            name_.empty() ? "" : "top ", name_.empty() ? "" : (name_ + ": ").c_str(), to_string(event), event_time_);
+  std_msgs::String message;
+  message.data = to_string(event);
+  event_publisher_.publish(message);
+}
+
+void TopInstance::rebaseline_energy() {
+  const ModelOutputs out = simulator_->snapshot().outputs;
+  energy_baseline_ = out.energy + out.dissipated_energy;
+}
+
+void TopInstance::append_transforms(const ros::Time& stamp, std::vector<geometry_msgs::TransformStamped>& out) const {
+  const Snapshot s = simulator_->snapshot();
+  geometry_msgs::TransformStamped body;
+  body.header.stamp = stamp;
+  body.header.frame_id = settings_.world_frame;
+  body.child_frame_id = body_frame_;
+  const Vector3 g = world(s.outputs.center_of_mass);
+  body.transform.translation = to_vector(g);
+  body.transform.rotation.w = s.attitude.w();
+  body.transform.rotation.x = s.attitude.x();
+  body.transform.rotation.y = s.attitude.y();
+  body.transform.rotation.z = s.attitude.z();
+  out.push_back(body);
+  if (!contact_is_static()) out.push_back(contact_transform(stamp));
+}
+
+geometry_msgs::TransformStamped TopInstance::contact_transform(const ros::Time& stamp) const {
+  // The contact frame: at the tip, axes parallel to the world's, so that the floor force
+  // (in world components) is drawn by rviz where it acts.
+  geometry_msgs::TransformStamped contact;
+  contact.header.stamp = stamp;
+  contact.header.frame_id = settings_.world_frame;
+  contact.child_frame_id = contact_frame_;
+  contact.transform.translation = to_vector(world(simulator_->snapshot().outputs.contact_point));
+  contact.transform.rotation.w = 1.0;
+  return contact;
+}
+
+bool TopInstance::publish(const ros::Time& stamp, bool with_markers) {
+  const Snapshot s = simulator_->snapshot();
+  if (!finite(s)) {  // the core promises this never happens; never pass it on
+    ROS_ERROR_ONCE("spinning_top: non-finite state at t = %.9g s not published", s.time);
+    return false;
+  }
+  const ModelOutputs& out = s.outputs;
+  const Vector3 contact = world(out.contact_point);
+  const Vector3 force(out.contact_force.x(), out.contact_force.y(), out.normal_force);
+
+  geometry_msgs::PointStamped point;
+  point.header.stamp = stamp;
+  point.header.frame_id = settings_.world_frame;
+  point.point = to_point(contact);
+  contact_point_publisher_.publish(point);
+
+  geometry_msgs::WrenchStamped wrench;
+  wrench.header.stamp = stamp;
+  wrench.header.frame_id = contact_frame_;
+  wrench.wrench.force = to_vector(force);  // pivot reaction or friction; 0 when frictionless
+  normal_force_publisher_.publish(wrench);  // torque about the tip: 0 (a point contact)
+
+  // The body's twist in the world frame: omega = q omega_body, and G's velocity.
+  const Vector3 omega = s.attitude * s.body_rates;
+  geometry_msgs::TwistStamped twist;
+  twist.header = point.header;
+  twist.twist.linear = to_vector(out.center_of_mass_velocity);
+  twist.twist.angular = to_vector(omega);
+  twist_publisher_.publish(twist);
+
+  if (state_publisher_.getNumSubscribers() > 0) {
+    const EulerState e = euler_state(s.attitude, s.body_rates);
+    const Monitors m = monitors(s, simulator_->config(), energy_baseline_);
+    spinning_top::TopState state;
+    state.header = point.header;
+    state.name = name_;
+    state.time = time_base_ + s.time;
+    state.tilt = e.tilt;
+    state.heading = e.heading;
+    state.spin_angle = e.spin_angle;
+    state.precession_rate = e.precession_rate;
+    state.nutation_rate = e.nutation_rate;
+    state.spin = e.spin;
+    state.angular_velocity = to_vector(omega);
+    state.center_of_mass = to_point(world(out.center_of_mass));
+    state.center_of_mass_velocity = to_vector(out.center_of_mass_velocity);
+    state.contact_point = to_point(contact);
+    state.normal_force = out.normal_force;
+    state.contact_force = to_vector(out.contact_force);
+    state.energy = out.energy;
+    state.dissipated_energy = out.dissipated_energy;
+    state.energy_balance = m.energy_balance;
+    state.quaternion_norm_error = m.quaternion_norm_error;
+    state.constraint_residual = m.constraint_residual;
+    state.event = event_name(simulator_->event());
+    state_publisher_.publish(state);
+  }
+
+  if (settings_.trace_length > 0 &&
+      (trace_.empty() || (trace_.back() - contact).norm() >= settings_.trace_resolution)) {
+    trace_.push_back(contact);
+    while (static_cast<int>(trace_.size()) > settings_.trace_length) trace_.pop_front();
+  }
+  if (with_markers)
+    marker_publisher_.publish(top_markers(simulator_->config().top, contact, force, trace_,
+                                          {settings_.world_frame, body_frame_}, settings_.force_scale, stamp));
+  return true;
+}
+
+void TopInstance::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) const {
+  using diagnostic_msgs::DiagnosticStatus;
+  const Snapshot s = simulator_->snapshot();
+  const ModelOutputs& out = s.outputs;
+  const Monitors m = monitors(s, simulator_->config(), energy_baseline_);
+  if (std::abs(m.energy_balance) > settings_.energy_drift_error)
+    status.mergeSummaryf(DiagnosticStatus::ERROR, "energy drift %.3g", m.energy_balance);
+  else if (std::abs(m.energy_balance) > settings_.energy_drift_warning)
+    status.mergeSummaryf(DiagnosticStatus::WARN, "energy drift %.3g", m.energy_balance);
+  if (m.quaternion_norm_error > settings_.quaternion_norm_error)
+    status.mergeSummaryf(DiagnosticStatus::ERROR, "quaternion norm off by %.3g", m.quaternion_norm_error);
+  if (m.constraint_residual > settings_.constraint_error)
+    status.mergeSummaryf(DiagnosticStatus::ERROR, "contact constraint residual %.3g m", m.constraint_residual);
+  if (reported_event_ != Event::kNone)
+    status.mergeSummaryf(DiagnosticStatus::ERROR, "event %s at t = %.9g s", to_string(reported_event_), event_time_);
+
+  if (!name_.empty()) status.add("top", name_);
+  status.add("scene", to_string(simulator_->config().scene));
+  // What runs and why (auto: its choice, and exact's refusal where it fell back).
+  const IntegratorChoice choice = simulator_->integrator_choice();
+  status.add("integrator", simulator_->integrator_description());
+  status.add("integrator method", to_string(choice.method));
+  if (choice.fallback) status.add("integrator fallback reason", choice.reason);
+  status.add("integrator steps since reset", simulator_->steps());
+  status.addf("simulated time [s]", "%.9g", time_base_ + s.time);
+  status.add("event", reported_event_ == Event::kNone ? "none" : to_string(reported_event_));
+  if (reported_event_ != Event::kNone) status.addf("event time [s]", "%.9g", event_time_);
+  status.addf("energy [J]", "%.12g", out.energy);
+  status.addf("dissipated energy [J]", "%.12g", out.dissipated_energy);
+  status.addf("energy balance (E + W - E0) / |E0|", "%.3g", m.energy_balance);
+  status.addf("quaternion norm error", "%.3g", m.quaternion_norm_error);
+  status.addf("constraint residual [m]", "%.3g", m.constraint_residual);
+  status.addf("normal force [N]", "%.9g", out.normal_force);
+}
+
+}  // namespace ros_front_end
+}  // namespace spinning_top
