@@ -27,6 +27,9 @@ class Recorder {
       messages_.push_back(*m);
     });
   }
+  // The subscription ends before the messages and the mutex go: a callback running on another
+  // spinner thread must not find them destroyed (roscpp's shutdown waits for it).
+  ~Recorder() { subscriber_.shutdown(); }
   std::vector<Message> messages() const {
     std::lock_guard<std::mutex> lock(mutex_);
     return messages_;
@@ -41,9 +44,9 @@ class Recorder {
   }
 
  private:
-  ros::Subscriber subscriber_;
   mutable std::mutex mutex_;
   std::vector<Message> messages_;
+  ros::Subscriber subscriber_;  // last: destroyed first
 };
 
 /// Polls a condition every 10 ms of wall time until it holds or `timeout` wall seconds pass.
