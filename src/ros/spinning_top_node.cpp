@@ -134,8 +134,11 @@ SpinningTopNode::SpinningTopNode(ros::NodeHandle nh, ros::NodeHandle private_nh)
   reconfigure_server_ = std::make_unique<dynamic_reconfigure::Server<SpinningTopConfig>>(private_nh_);
   reconfigure_server_->setCallback([this](SpinningTopConfig& c, uint32_t level) { reconfigure(c, level); });
 
+  // The pacing and the wall-clock stamps start together, after the set-up above (advertising
+  // and the reconfigure server take tens of ms): tick n is due at the wall time it is stamped.
   window_wall_start_ = ros::WallTime::now();
   clock_.anchor(window_wall_start_.toSec());
+  if (!ros::Time::isSimTime()) last_stamp_ = stamp_origin_ = ros::Time(window_wall_start_.sec, window_wall_start_.nsec);
   restart_timer();
   diagnostics_timer_ = nh_.createWallTimer(ros::WallDuration(1.0), &SpinningTopNode::on_diagnostics_timer, this);
   for (const auto& top : tops_)
