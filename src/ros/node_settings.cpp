@@ -64,7 +64,7 @@ std::vector<std::string> read_top_names(const ros::NodeHandle& nh) {
 const std::vector<std::string>& node_setting_keys() {
   static const std::vector<std::string> keys = {
       "rate", "real_time_factor", "max_lag", "tick_budget", "publish_clock", "clock_rate", "tf_rate",
-      "start_paused", "world_frame", "body_frame", "contact_frame", "marker_rate", "trace_length",
+      "start_paused", "wait_for_subscriber", "world_frame", "body_frame", "contact_frame", "marker_rate", "trace_length",
       "trace_resolution", "force_scale", "energy_drift_warning", "energy_drift_error", "quaternion_norm_error",
       "constraint_error", "late_tick_warning", "real_time_factor_warning", "tops"};
   return keys;
@@ -108,6 +108,7 @@ NodeSettings read_node_settings(const ros::NodeHandle& nh) {
   s.clock_rate = read_publication_rate(nh, "clock_rate", s.clock_rate);
   s.tf_rate = read_publication_rate(nh, "tf_rate", s.tf_rate);
   s.start_paused = read_bool(nh, "start_paused", s.start_paused);
+  s.wait_for_subscriber = read_bool(nh, "wait_for_subscriber", s.wait_for_subscriber);
   s.world_frame = read_string(nh, "world_frame", s.world_frame);
   s.body_frame = read_string(nh, "body_frame", s.body_frame);
   s.contact_frame = read_string(nh, "contact_frame", s.contact_frame);

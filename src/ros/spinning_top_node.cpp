@@ -87,6 +87,7 @@ SpinningTopNode::SpinningTopNode(ros::NodeHandle nh, ros::NodeHandle private_nh)
   }
   warn_about_unknown_keys(private_nh_, settings_.tops);
   paused_ = settings_.start_paused;
+  waiting_for_subscriber_ = settings_.wait_for_subscriber;
   // Under use_sim_time our own /clock is the time base and starts at the first tick (never
   // 0); otherwise stamps start at the wall time of the start, so that tf users on wall time
   // see current transforms at real_time_factor 1.
@@ -221,6 +222,15 @@ void SpinningTopNode::restart_timer() {
 void SpinningTopNode::on_timer(const ros::WallTimerEvent&) {
   if (paused_) return;
   const ros::WallTime start = ros::WallTime::now();
+  if (waiting_for_subscriber_) {
+    const bool clock_heard = !settings_.publish_clock || clock_publisher_.getNumSubscribers() > 0;
+    if (!clock_heard || tops_.empty() || !tops_.front()->subscribed()) return;
+    // The first subscriber is there: pacing (and wall-clock stamps) start now, at tick 1.
+    waiting_for_subscriber_ = false;
+    clock_.anchor(start.toSec());
+    if (!ros::Time::isSimTime()) last_stamp_ = stamp_origin_ = ros::Time(start.sec, start.nsec);
+    ROS_INFO("spinning_top: a subscriber is there; the simulation starts");
+  }
   if (settings_.real_time_factor == 0.0) {
     // As fast as possible: ticks back to back for one slice, then back to the callback
     // queue so that services and dynamic_reconfigure are served.

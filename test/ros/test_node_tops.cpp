@@ -249,6 +249,16 @@ TEST(Tops, TwistIsThePoseDerivative) {
   EXPECT_GT(compared, 100);
 }
 
+// ~wait_for_subscriber (what record:=true sets): seconds after the start, the first message a
+// late subscriber gets is the first tick's, stamped 1/rate (simulated time, origin 0).
+TEST(Tops, WaitsForTheFirstSubscriber) {
+  ros::WallDuration(1.0).sleep();
+  ros::NodeHandle nh;
+  Recorder<geometry_msgs::PointStamped> points(nh, "/waiting/contact_point");
+  ASSERT_TRUE(wait_for([&] { return points.size() >= 10; }, 10.0));
+  EXPECT_EQ(points.messages().front().header.stamp, ros::Time(1.0 / 500.0));
+}
+
 }  // namespace
 
 int main(int argc, char** argv) { return node_test::run_node_tests(argc, argv, "test_node_tops", 2); }

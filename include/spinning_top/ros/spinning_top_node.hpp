@@ -72,6 +72,7 @@ class SpinningTopNode {
   ros::Time stamp_origin_;
   ros::Time last_stamp_;
   bool paused_ = false;
+  bool waiting_for_subscriber_ = false;  // ~wait_for_subscriber: no tick yet, nobody listening yet
   bool tick_unfinished_ = false;  // the current tick ran out of its budget; the next call goes on
   long ticks_per_clock_ = 1, ticks_per_tf_ = 1, ticks_per_marker_ = 1;
 
