@@ -255,8 +255,12 @@ TEST(Tops, WaitsForTheFirstSubscriber) {
   ros::WallDuration(1.0).sleep();
   ros::NodeHandle nh;
   Recorder<geometry_msgs::PointStamped> points(nh, "/waiting/contact_point");
-  ASSERT_TRUE(wait_for([&] { return points.size() >= 10; }, 10.0));
+  ros::WallDuration(0.5).sleep();
+  EXPECT_EQ(points.size(), 0u) << "ran before ~state had a subscriber";
+  Recorder<spinning_top::TopState> states(nh, "/waiting/state");
+  ASSERT_TRUE(wait_for([&] { return points.size() >= 10 && states.size() >= 10; }, 10.0));
   EXPECT_EQ(points.messages().front().header.stamp, ros::Time(1.0 / 500.0));
+  EXPECT_EQ(states.messages().front().header.stamp, ros::Time(1.0 / 500.0));
 }
 
 }  // namespace

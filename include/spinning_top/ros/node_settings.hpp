@@ -20,8 +20,8 @@ struct NodeSettings {
   double clock_rate = 0.0;          ///< /clock messages per simulated second [Hz]; 0 = every tick
   double tf_rate = 0.0;             ///< /tf messages per simulated second [Hz]; 0 = every tick
   bool start_paused = false;
-  /// Hold the first tick until the first top's ~contact_point (and /clock, when published) has a
-  /// subscriber, e.g. `rosbag record`, so that a recording starts at simulated time 0
+  /// Hold the first tick until the first top's ~contact_point and ~state (and /clock, when
+  /// published) have a subscriber, e.g. `rosbag record`, so that a recording starts at time 0
   bool wait_for_subscriber = false;
   std::string world_frame = "world";
   std::string body_frame = "top";

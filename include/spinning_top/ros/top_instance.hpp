@@ -62,8 +62,10 @@ class TopInstance {
 
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) const;
   Event event() const { return simulator_->event(); }
-  /// Whether anyone listens to ~contact_point (for ~wait_for_subscriber).
-  bool subscribed() const { return contact_point_publisher_.getNumSubscribers() > 0; }
+  /// Whether ~contact_point and ~state both have a subscriber (for ~wait_for_subscriber).
+  bool subscribed() const {
+    return contact_point_publisher_.getNumSubscribers() > 0 && state_publisher_.getNumSubscribers() > 0;
+  }
 
  private:
   /// Replaces the simulator (validated first) and rebaselines the energy.
