@@ -31,7 +31,7 @@ def splice(text: str, name: str, body: str, path: pathlib.Path) -> str:
 results = pathlib.Path(sys.argv[1])
 targets = [pathlib.Path(arg) for arg in sys.argv[2:]]
 blocks = {"work_precision": ratio_table((results / "summary.md").read_text())}
-for name in ("default_ratio", "default_ratio_summary", "reinit_cost", "extreme_cases", "fuzz", "soak", "sweep"):
+for name in ("default_ratio", "default_ratio_summary", "reinit_cost", "extreme_cases", "fuzz", "soak", "sweep", "node_load"):
     path = results / f"{name}.md"
     if path.exists():
         blocks[name] = path.read_text().strip()

@@ -66,6 +66,14 @@ echo "bench.sh: sweep throughput: cases per second per core, a 1e6-case map, Das
   /usr/bin/python3 "$SPINNING_TOP_ROOT/bench/sweep_throughput.py" "$results" "${quick[@]}"
 )
 
+echo "bench.sh: the node's CPU at 1 kHz with one and five tops, ticks per second at real-time factor 0 (issue 9)"
+cmake --build "$SPINNING_TOP_BUILD" --target spinning_top_node -- -j"$(nproc)"
+(
+  set +u
+  source "$SPINNING_TOP_BUILD/devel/setup.bash"
+  SPINNING_TOP_NODE="$bin/spinning_top_node" /usr/bin/python3 "$SPINNING_TOP_ROOT/bench/node_load.py" "$results" "${quick[@]}"
+)
+
 echo "bench.sh: plots and summary"
 /usr/bin/python3 "$SPINNING_TOP_ROOT/bench/plot_results.py" "$results"
 # The README shows the measured tables; a --quick run's coarse figures do not replace them.
