@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 
 namespace spinning_top {
 namespace ros_front_end {
@@ -123,6 +124,38 @@ visualization_msgs::MarkerArray top_markers(const TopParameters& top, const Vect
   arrow.color = color(0.2f, 0.8f, 0.2f);
   array.markers.push_back(arrow);
   return array;
+}
+
+std::string top_urdf(const TopParameters& top, const std::string& link) {
+  const BodyShape shape = body_shape(top);
+  char buffer[512];
+  std::string urdf = "<?xml version=\"1.0\"?>\n<robot name=\"spinning_top\">\n";
+  urdf += "  <material name=\"rim\"><color rgba=\"0.9 0.35 0.1 1\"/></material>\n";
+  urdf += "  <material name=\"handle\"><color rgba=\"0.3 0.3 0.35 1\"/></material>\n";
+  urdf += "  <link name=\"" + link + "\">\n";
+  std::snprintf(buffer, sizeof buffer,
+                "    <inertial><origin xyz=\"0 0 0\"/><mass value=\"%.17g\"/>"
+                "<inertia ixx=\"%.17g\" iyy=\"%.17g\" izz=\"%.17g\" ixy=\"0\" ixz=\"0\" iyz=\"0\"/></inertial>\n",
+                top.mass, top.inertia_transverse, top.inertia_transverse, top.inertia_axial);
+  urdf += buffer;
+  // The cone from the tip (z = -h) to its base, as 8 cylinders of the mean radius of each slice.
+  const int slices = 8;
+  const double slice = shape.height / slices;
+  for (int i = 0; i < slices; ++i) {
+    std::snprintf(buffer, sizeof buffer,
+                  "    <visual><origin xyz=\"0 0 %.9g\"/><geometry><cylinder radius=\"%.9g\" length=\"%.9g\"/>"
+                  "</geometry><material name=\"rim\"/></visual>\n",
+                  -top.tip_distance + (i + 0.5) * slice, shape.radius * (i + 0.5) / slices, slice);
+    urdf += buffer;
+  }
+  const double base_z = shape.height - top.tip_distance;
+  std::snprintf(buffer, sizeof buffer,
+                "    <visual><origin xyz=\"0 0 %.9g\"/><geometry><cylinder radius=\"%.9g\" length=\"%.9g\"/>"
+                "</geometry><material name=\"handle\"/></visual>\n",
+                base_z + 0.2 * shape.height, 0.075 * shape.radius, 0.4 * shape.height);
+  urdf += buffer;
+  urdf += "  </link>\n</robot>\n";
+  return urdf;
 }
 
 }  // namespace ros_front_end

@@ -42,10 +42,12 @@ void warn_about_unknown_keys(const ros::NodeHandle& private_nh, const std::vecto
   std::vector<std::string> known = parameter_keys();
   for (const std::string& key : node_setting_keys()) known.push_back(key);
   known.push_back(kSpinKey);
+  known.push_back("robot_description");  // the node writes it (a URDF of the top)
   for (const std::string& name : top_names) {
     for (const std::string& key : parameter_keys()) known.push_back(name + "/" + key);
     known.push_back(name + "/x");
     known.push_back(name + "/y");
+    known.push_back(name + "/robot_description");
   }
   std::vector<std::string> names;
   if (!ros::param::getParamNames(names)) return;

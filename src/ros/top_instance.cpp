@@ -79,6 +79,11 @@ TopInstance::TopInstance(std::string name, const SceneConfig& config, const Eige
   state_publisher_ = nh_.advertise<spinning_top::TopState>("state", 100);
   marker_publisher_ = nh_.advertise<visualization_msgs::MarkerArray>("markers", 10);
   event_publisher_ = nh_.advertise<std_msgs::String>("event", 1, /*latch=*/true);
+  nh_.setParam("robot_description", top_urdf(start_config_.top, body_frame_));
+}
+
+TopInstance::~TopInstance() {
+  if (!name_.empty()) nh_.deleteParam("robot_description");  // a killed top's; the node's own stays
 }
 
 void TopInstance::start(const SceneConfig& config, double time_base, double world_time) {
@@ -146,6 +151,7 @@ void TopInstance::change_body(const TopParameters& top, double spin, double worl
   const Vector3 tip = world(now.outputs.contact_point);
   start(config, time_base_ + simulator_->time(), world_time);  // validates the state with the new body
   start_config_ = new_start;
+  nh_.setParam("robot_description", top_urdf(top, body_frame_));
   // The tip stays where it is: the new model's origin moves under it.
   const Vector3 new_tip = simulator_->snapshot().outputs.contact_point;
   offset_ = Vector3(tip.x() - new_tip.x(), tip.y() - new_tip.y(), 0.0);

@@ -83,6 +83,12 @@ TEST(Tops, TwoTopsShareOneClock) {
   EXPECT_EQ(pivots["slow/contact"].y, 0.1);
   EXPECT_EQ(pivots["fast/contact"].y, -0.1);
   EXPECT_EQ(slow.messages().back().point.y, 0.1);
+
+  // Each top's URDF for rviz's RobotModel: one link named as its body frame, with its mass.
+  std::string urdf;
+  ASSERT_TRUE(ros::param::get("/spinning_top/fast/robot_description", urdf));
+  EXPECT_NE(urdf.find("<link name=\"fast/top\">"), std::string::npos) << urdf;
+  EXPECT_NE(urdf.find("<mass value=\"0.10000000000000001\"/>"), std::string::npos) << urdf;
 }
 
 // ~spawn adds a top with its own keys, refuses bad ones naming the key, and ~kill removes it.
@@ -126,6 +132,7 @@ TEST(Tops, SpawnAndKill) {
   ros::WallDuration(0.5).sleep();
   EXPECT_EQ(third.size(), after) << "published after ~kill";
   EXPECT_FALSE(call<spinning_top::Kill>("/spinning_top/kill", kill).success) << "killed twice";
+  EXPECT_FALSE(ros::param::has("/spinning_top/third/robot_description")) << "a killed top's URDF stays";
 }
 
 // ~set_state, read back from ~state over two ticks (paused, then ~step twice): the spin is a

@@ -23,5 +23,10 @@ visualization_msgs::MarkerArray top_markers(const TopParameters& top, const Vect
                                             const Vector3& force, const std::deque<Vector3>& trace,
                                             const MarkerFrames& frames, double force_scale, const ros::Time& stamp);
 
+/// A URDF of the top (for rviz's RobotModel display, as `robot_description`): one link named
+/// `link` (the body frame: origin at G, z along the axis) with the top's mass and inertia and
+/// the marker's cone as stacked cylinders (URDF has no cone).
+std::string top_urdf(const TopParameters& top, const std::string& link);
+
 }  // namespace ros_front_end
 }  // namespace spinning_top

@@ -22,10 +22,14 @@ class TopInstance {
  public:
   /// `name` "" is the node's own top: frames <body_frame>, <contact_frame> and topics ~/...;
   /// a named top has frames <name>/<body_frame>, <name>/<contact_frame> and topics ~<name>/....
+  /// Its URDF goes on ~robot_description (~<name>/robot_description).
   /// Its simulated time 0 is the world's `world_time`; its tip starts at `tip_xy` on the floor.
   /// Throws InvalidParameter (nothing advertised) if the configuration is invalid.
   TopInstance(std::string name, const SceneConfig& config, const Eigen::Vector2d& tip_xy,
               const NodeSettings& settings, ros::NodeHandle private_nh, double world_time);
+  ~TopInstance();
+  TopInstance(const TopInstance&) = delete;
+  TopInstance& operator=(const TopInstance&) = delete;
 
   const std::string& name() const { return name_; }
   const Simulator& simulator() const { return *simulator_; }
