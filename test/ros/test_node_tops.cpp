@@ -256,6 +256,38 @@ TEST(Tops, TwistIsThePoseDerivative) {
   EXPECT_GT(compared, 100);
 }
 
+// ~reload reads the keys again: a new tilt for "fast" is its state one tick after; a bad one is
+// refused naming the key (response and ~status) and nothing changes (the top's time goes on).
+TEST(Tops, ReloadReadsTheParametersAgain) {
+  ros::NodeHandle nh;
+  Recorder<spinning_top::TopState> fast(nh, "/spinning_top/fast/state");
+  Recorder<std_msgs::String> status(nh, "/spinning_top/status");
+  ASSERT_TRUE(wait_for([&] { return fast.size() > 0; }, 10.0));
+  EXPECT_TRUE(trigger("/spinning_top/pause").success);
+  ros::WallDuration(0.3).sleep();
+  ros::param::set("/spinning_top/fast/initial/tilt", 0.4);
+  const auto reloaded = trigger("/spinning_top/reload");
+  EXPECT_TRUE(reloaded.success) << reloaded.message;
+  fast.clear();
+  EXPECT_TRUE(trigger("/spinning_top/step").success);
+  ASSERT_TRUE(wait_for([&] { return fast.size() == 1; }, 5.0));
+  const double dt = 1.0 / 500.0;
+  EXPECT_NEAR(fast.messages()[0].time, dt, 1e-12);
+  EXPECT_NEAR(fast.messages()[0].tilt, 0.4, 1e-3);  // from rest: (m g h sin(theta) / A') dt^2 / 2
+  EXPECT_EQ(fast.messages()[0].spin, 150.0) << "the key's spin, not the live kick's";
+
+  ros::param::set("/spinning_top/fast/initial/tilt", 2.5);
+  const auto refused = trigger("/spinning_top/reload");
+  EXPECT_FALSE(refused.success);
+  EXPECT_NE(refused.message.find("fast/initial/tilt"), std::string::npos) << refused.message;
+  ASSERT_TRUE(wait_for([&] { return !status.messages().empty() && status.messages().back().data.find("refused") == 0; }, 5.0));
+  EXPECT_TRUE(trigger("/spinning_top/step").success);
+  ASSERT_TRUE(wait_for([&] { return fast.size() == 2; }, 5.0));
+  EXPECT_NEAR(fast.messages()[1].time, 2.0 * dt, 1e-12) << "a refused reload changed the top";
+  ros::param::set("/spinning_top/fast/initial/tilt", 0.3);
+  EXPECT_TRUE(trigger("/spinning_top/resume").success);
+}
+
 // ~wait_for_subscriber (what record:=true sets): seconds after the start, the first message a
 // late subscriber gets is the first tick's, stamped 1/rate (simulated time, origin 0).
 TEST(Tops, WaitsForTheFirstSubscriber) {
