@@ -4,17 +4,11 @@
 #include <cmath>
 #include <cstdio>
 
+#include "spinning_top/ros/conversions.hpp"
+
 namespace spinning_top {
 namespace ros_front_end {
 namespace {
-
-geometry_msgs::Point to_point(const Vector3& v) {
-  geometry_msgs::Point p;
-  p.x = v.x();
-  p.y = v.y();
-  p.z = v.z();
-  return p;
-}
 
 std_msgs::ColorRGBA color(float r, float g, float b, float a = 1.0f) {
   std_msgs::ColorRGBA c;

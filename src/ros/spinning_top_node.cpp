@@ -233,27 +233,14 @@ void SpinningTopNode::on_timer(const ros::WallTimerEvent&) {
     if (!ros::Time::isSimTime()) last_stamp_ = stamp_origin_ = ros::Time(start.sec, start.nsec);
     ROS_INFO("spinning_top: a subscriber is there; the simulation starts");
   }
-  if (settings_.real_time_factor == 0.0) {
-    // As fast as possible: ticks back to back for one slice, then back to the callback
-    // queue so that services and dynamic_reconfigure are served.
-    const ros::WallTime deadline = start + ros::WallDuration(std::min(kAsFastAsPossibleSlice, settings_.tick_budget));
-    ros::WallTime now = start;
-    while (!paused_ && now < deadline) {
-      const bool finished = tick(deadline);
-      const ros::WallTime end = ros::WallTime::now();
-      tick_cost_sum_ += (end - now).toSec();
-      tick_cost_max_ = std::max(tick_cost_max_, (end - now).toSec());
-      now = end;
-      if (!finished) break;
-      ++ticks_in_window_;
-    }
-    return;
-  }
+  // As fast as possible (factor 0): ticks back to back for one slice, then back to the callback
+  // queue so that services and dynamic_reconfigure are served.
   // Real-time pacing: every tick whose slot has come is taken, late ones too (a busy machine
   // delayed the timer), within this callback's work budget; the simulated time thus keeps up
   // with the wall clock. Beyond ~max_lag the overload is given up (reported), and with wall-
   // clock stamps their origin moves on by what was given up, so stamps stay near the wall clock.
-  const long given_up = clock_.give_up_beyond(start.toSec(), settings_.max_lag);
+  const bool paced = settings_.real_time_factor > 0.0;
+  const long given_up = paced ? clock_.give_up_beyond(start.toSec(), settings_.max_lag) : 0;
   if (given_up > 0) {
     given_up_ticks_ += given_up;
     if (!ros::Time::isSimTime()) stamp_origin_ += ros::Duration(static_cast<double>(given_up) / settings_.rate);
@@ -261,10 +248,11 @@ void SpinningTopNode::on_timer(const ros::WallTimerEvent&) {
                            "(the machine cannot keep up with %g Hz at real-time factor %g)",
                       settings_.max_lag, given_up, settings_.rate, settings_.real_time_factor);
   }
-  const ros::WallTime deadline = start + ros::WallDuration(settings_.tick_budget);
+  const ros::WallTime deadline =
+      start + ros::WallDuration(paced ? settings_.tick_budget : std::min(kAsFastAsPossibleSlice, settings_.tick_budget));
   ros::WallTime now = start;
-  while (!paused_) {
-    if (!tick_unfinished_) {
+  while (!paused_ && now < deadline) {
+    if (paced && !tick_unfinished_) {
       const long due = clock_.due(now.toSec());
       if (due == 0) break;
       if (due > 1) ++late_ticks_;
@@ -276,9 +264,8 @@ void SpinningTopNode::on_timer(const ros::WallTimerEvent&) {
     now = end;
     if (!finished) break;
     ++ticks_in_window_;
-    if (now >= deadline) break;
   }
-  last_lag_ = clock_.lag(now.toSec());
+  if (paced) last_lag_ = clock_.lag(now.toSec());
 }
 
 bool SpinningTopNode::tick(ros::WallTime deadline) {
@@ -325,7 +312,7 @@ void SpinningTopNode::publish(const ros::Time& stamp) {
   if (tick % ticks_per_tf_ == 0) {
     std::vector<geometry_msgs::TransformStamped> transforms;
     for (const auto& top : tops_) top->append_transforms(stamp, transforms);
-    tf_broadcaster_->sendTransform(transforms);
+    if (!transforms.empty()) tf_broadcaster_->sendTransform(transforms);  // none once every top is killed
   }
   const bool markers = tick % ticks_per_marker_ == 0;
   for (const auto& top : tops_) top->publish(stamp, markers);

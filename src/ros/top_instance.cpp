@@ -11,6 +11,7 @@
 
 #include "spinning_top/TopState.h"
 #include "spinning_top/kinematics.hpp"
+#include "spinning_top/ros/conversions.hpp"
 #include "spinning_top/ros/markers.hpp"
 
 namespace spinning_top {
@@ -23,22 +24,6 @@ bool finite(const Snapshot& s) {
          o.center_of_mass.allFinite() && o.center_of_mass_velocity.allFinite() && o.contact_point.allFinite() &&
          o.contact_force.allFinite() && std::isfinite(o.normal_force) && std::isfinite(o.energy) &&
          std::isfinite(o.dissipated_energy);
-}
-
-geometry_msgs::Point to_point(const Vector3& v) {
-  geometry_msgs::Point p;
-  p.x = v.x();
-  p.y = v.y();
-  p.z = v.z();
-  return p;
-}
-
-geometry_msgs::Vector3 to_vector(const Vector3& v) {
-  geometry_msgs::Vector3 p;
-  p.x = v.x();
-  p.y = v.y();
-  p.z = v.z();
-  return p;
 }
 
 /// What diagnostics and the state message report of the numerics.

@@ -9,7 +9,10 @@
 #include <ros/ros.h>
 #include <std_srvs/Trigger.h>
 
+#include <sys/wait.h>
+
 #include <cmath>
+#include <cstdio>
 #include <functional>
 #include <mutex>
 #include <string>
@@ -85,6 +88,24 @@ inline double reconfigure(const std::string& node, const std::string& name, doub
 
 inline bool finite(const geometry_msgs::WrenchStamped& w) {
   return std::isfinite(w.wrench.force.x) && std::isfinite(w.wrench.force.y) && std::isfinite(w.wrench.force.z);
+}
+
+/// What a shell command printed (stdout and stderr) and its exit code (-1 if it did not exit).
+struct Outcome {
+  int exit_code;
+  std::string output;
+};
+
+inline Outcome run_command(const std::string& command) {
+  FILE* pipe = popen((command + " 2>&1").c_str(), "r");
+  EXPECT_NE(pipe, nullptr) << command;
+  Outcome outcome{-1, ""};
+  if (pipe == nullptr) return outcome;
+  char buffer[4096];
+  while (fgets(buffer, sizeof buffer, pipe) != nullptr) outcome.output += buffer;
+  const int status = pclose(pipe);
+  outcome.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return outcome;
 }
 
 /// A rostest gtest's main: ROS node `name`, callbacks on an AsyncSpinner of `threads` threads.

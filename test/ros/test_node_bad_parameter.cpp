@@ -4,9 +4,6 @@
 #include <geometry_msgs/PointStamped.h>
 #include <gtest/gtest.h>
 #include <ros/ros.h>
-#include <sys/wait.h>
-
-#include <cstdio>
 #include <string>
 
 #include "node_test_helpers.hpp"
@@ -15,25 +12,13 @@ using node_test::Recorder;
 
 namespace {
 
-struct Outcome {
-  int exit_code;
-  std::string output;
-};
+using node_test::Outcome;
 
 /// Runs the node as `name` with the given private-parameter arguments, for at most
 /// `seconds` (then `timeout` ends it with exit code 124).
 Outcome run_node(const std::string& name, const std::string& arguments, int seconds = 20) {
-  const std::string command = "timeout " + std::to_string(seconds) + " " SPINNING_TOP_NODE_EXECUTABLE " __name:=" +
-                              name + " " + arguments + " 2>&1";
-  FILE* pipe = popen(command.c_str(), "r");
-  EXPECT_NE(pipe, nullptr);
-  Outcome outcome{-1, ""};
-  if (pipe == nullptr) return outcome;
-  char buffer[4096];
-  while (fgets(buffer, sizeof buffer, pipe) != nullptr) outcome.output += buffer;
-  const int status = pclose(pipe);
-  outcome.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return outcome;
+  return node_test::run_command("timeout " + std::to_string(seconds) + " " SPINNING_TOP_NODE_EXECUTABLE " __name:=" +
+                                name + " " + arguments);
 }
 
 void expect_refused(const std::string& name, const std::string& arguments, const std::string& parameter) {

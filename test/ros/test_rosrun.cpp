@@ -4,37 +4,22 @@
 #include <geometry_msgs/PointStamped.h>
 #include <gtest/gtest.h>
 #include <ros/ros.h>
-#include <sys/wait.h>
-
-#include <cstdio>
 #include <string>
 
 #include "node_test_helpers.hpp"
 
 namespace {
 
-struct Outcome {
-  int exit_code;
-  std::string output;
-};
+using node_test::Outcome;
 
-Outcome run(const std::string& command) {
-  FILE* pipe = popen((command + " 2>&1").c_str(), "r");
-  Outcome outcome{-1, ""};
-  if (pipe == nullptr) return outcome;
-  char buffer[4096];
-  while (fgets(buffer, sizeof buffer, pipe) != nullptr) outcome.output += buffer;
-  const int status = pclose(pipe);
-  outcome.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return outcome;
-}
+using node_test::run_command;
 
 TEST(Rosrun, BatchSimulator) {
-  const Outcome help = run("rosrun spinning_top simulate --help");
+  const Outcome help = run_command("rosrun spinning_top simulate --help");
   EXPECT_EQ(help.exit_code, 0) << help.output;
   EXPECT_NE(help.output.find("--config"), std::string::npos) << help.output;
   // A run: 0.01 s of the default scene, a comment, a header and rows of CSV.
-  const Outcome csv = run("rosrun spinning_top simulate --config \"$(rospack find spinning_top)/config/fixed_tip.yaml\" --duration 0.01 --output-rate 1000");
+  const Outcome csv = run_command("rosrun spinning_top simulate --config \"$(rospack find spinning_top)/config/fixed_tip.yaml\" --duration 0.01 --output-rate 1000");
   EXPECT_EQ(csv.exit_code, 0) << csv.output;
   EXPECT_NE(csv.output.find("t,qw,qx,qy,qz"), std::string::npos) << csv.output;
 }
@@ -43,7 +28,7 @@ TEST(Rosrun, Node) {
   ros::NodeHandle nh;
   node_test::Recorder<geometry_msgs::PointStamped> points(nh, "/via_rosrun/contact_point");
   // The node runs until `timeout` ends it (SIGTERM, exit 124); it must have published by then.
-  const Outcome node = run("timeout 6 rosrun spinning_top spinning_top_node __name:=via_rosrun _publish_clock:=false");
+  const Outcome node = run_command("timeout 6 rosrun spinning_top spinning_top_node __name:=via_rosrun _publish_clock:=false");
   EXPECT_EQ(node.exit_code, 124) << "the node exited by itself:\n" << node.output;
   EXPECT_EQ(node.output.find("Couldn't find executable"), std::string::npos) << node.output;
   EXPECT_GT(points.size(), 100u) << node.output;
