@@ -440,7 +440,7 @@ void SpinningTopNode::reconfigure(SpinningTopConfig& config, uint32_t /*level*/)
         if (body_changed) {
           const double spin = config.spin != old.spin ? config.spin : top->simulator().snapshot().body_rates.z();
           top->update(top->simulator().config().top, new_integrator);
-          top->change_body(new_top, spin, clock_.time());
+          top->change_body(new_top, spin);
         } else if (top->update(new_top, new_integrator)) {
           // auto chose again for the current state (exact may refuse it now, or accept it again).
           ROS_WARN("spinning_top: the update switched the integrator of %s at t = %.9g s: now %s",

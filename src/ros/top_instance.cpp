@@ -110,7 +110,7 @@ bool TopInstance::update(const TopParameters& top, const IntegratorSettings& int
   return switched;
 }
 
-void TopInstance::change_body(const TopParameters& top, double spin, double world_time) {
+void TopInstance::change_body(const TopParameters& top, double spin) {
   if (simulator_->event() != Event::kNone)
     throw InvalidParameter("mass", std::string("the top stopped at its ") + to_string(simulator_->event()) +
                                        " event: reset it before changing its body");
@@ -134,7 +134,9 @@ void TopInstance::change_body(const TopParameters& top, double spin, double worl
   new_start.initial.spin = spin;
   validate(new_start);  // ~reset must still work with the new body
   const Vector3 tip = world(now.outputs.contact_point);
-  start(config, time_base_ + simulator_->time(), world_time);  // validates the state with the new body
+  // The new model starts where the old one is: at the world time of its state (an unfinished
+  // tick has not reached the world's time yet).
+  start(config, time_base_ + simulator_->time(), origin_ + simulator_->time());  // validates the state
   start_config_ = new_start;
   nh_.setParam("robot_description", top_urdf(top, body_frame_));
   // The tip stays where it is: the new model's origin moves under it.

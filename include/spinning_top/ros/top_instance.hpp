@@ -60,7 +60,7 @@ class TopInstance {
   /// Live changes of the body (m, A, C, h) and of the spin omega_Z, from the current state: the
   /// attitude, the other rates, the tip's place and the simulated time go on. Refused (throws
   /// InvalidParameter, nothing changes) for an invalid body or state, or after a validity event.
-  void change_body(const TopParameters& top, double spin, double world_time);
+  void change_body(const TopParameters& top, double spin);
   /// The tip's position on the floor now [m].
   Eigen::Vector2d tip_xy() const;
 
