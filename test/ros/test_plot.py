@@ -60,6 +60,15 @@ class PlotBag(unittest.TestCase):
         self.assertLess(max(balance) - min(balance), 1e-9 * abs(balance[0]))
         self.assertGreater(self.messages[-1].dissipated_energy, 0.0)
 
+    def test_live_from_the_running_node(self):
+        png = os.path.join(self.directory, "live.png")
+        result = subprocess.run(["rosrun", "spinning_top", "plot", "--duration", "2", "--no-show", "--path",
+                                 "--output", png], capture_output=True, text=True, timeout=120)
+        self.assertEqual(result.returncode, 0, result.stderr)
+        count = int(result.stdout.split(f"{TOPIC}: ")[1].split(" messages")[0])
+        self.assertGreater(count, 500)  # 2 s of wall time at 500 Hz and real-time factor 1
+        self.assertGreater(os.path.getsize(png), 20000)
+
     def test_refuses_a_field_that_is_not_a_number(self):
         for field in ("nonsense", "event", "contact_point"):
             result = self.plot("--fields", field, "--output", os.path.join(self.directory, "bad.png"))
