@@ -116,7 +116,6 @@ SpinningTopNode::SpinningTopNode(ros::NodeHandle nh, ros::NodeHandle private_nh)
   if (settings_.publish_clock) clock_publisher_ = nh_.advertise<rosgraph_msgs::Clock>("/clock", 100);
   status_publisher_ = private_nh_.advertise<std_msgs::String>("status", 1, /*latch=*/true);
   tf_broadcaster_ = std::make_unique<tf2_ros::TransformBroadcaster>();
-  static_broadcaster_ = std::make_unique<tf2_ros::StaticTransformBroadcaster>();
   diagnostics_ = std::make_unique<diagnostic_updater::Updater>(nh_, private_nh_);
   diagnostics_->setHardwareID("spinning_top/" + std::string(to_string(first.scene)));
   diagnostics_->add("simulation", this, &SpinningTopNode::diagnose);
@@ -205,7 +204,14 @@ void SpinningTopNode::send_static_transforms() {
   std::vector<geometry_msgs::TransformStamped> transforms;
   for (const auto& top : tops_)
     if (top->contact_is_static()) transforms.push_back(top->contact_transform(last_stamp_));
-  if (!transforms.empty()) static_broadcaster_->sendTransform(transforms);
+  // A fresh broadcaster: tf2_ros's keeps every frame it was ever sent in its latched message, so
+  // a killed top's pivot would reach later subscribers (tf2 cannot remove a static frame from
+  // a listener that already has it).
+  if (transforms.empty() && !static_sent_) return;  // nothing static, now or before
+  auto broadcaster = std::make_unique<tf2_ros::StaticTransformBroadcaster>();
+  broadcaster->sendTransform(transforms);
+  static_broadcaster_ = std::move(broadcaster);
+  static_sent_ = true;
 }
 
 void SpinningTopNode::restart_timer() {
@@ -611,6 +617,7 @@ bool SpinningTopNode::on_kill(Kill::Request& request, Kill::Response& response) 
                                            [&](const ros::ServiceServer& s) { return s.getService() == service; }),
                             top_reset_services_.end());
   tops_.erase(it);
+  send_static_transforms();
   response.success = true;
   response.message = "killed " + request.name;
   ROS_INFO("spinning_top: %s", response.message.c_str());

@@ -133,6 +133,12 @@ TEST(Tops, SpawnAndKill) {
   EXPECT_EQ(third.size(), after) << "published after ~kill";
   EXPECT_FALSE(call<spinning_top::Kill>("/spinning_top/kill", kill).success) << "killed twice";
   EXPECT_FALSE(ros::param::has("/spinning_top/third/robot_description")) << "a killed top's URDF stays";
+  // A later /tf_static subscriber gets the pivots of the tops that are left, not the killed one's.
+  Recorder<tf2_msgs::TFMessage> tf_static(nh, "/tf_static", 10);
+  ASSERT_TRUE(wait_for([&] { return tf_static.size() > 0; }, 5.0));
+  std::set<std::string> frames;
+  for (const auto& t : tf_static.messages().back().transforms) frames.insert(t.child_frame_id);
+  EXPECT_EQ(frames, (std::set<std::string>{"slow/contact", "fast/contact"}));
 }
 
 // ~set_state, read back from ~state over two ticks (paused, then ~step twice): the spin is a

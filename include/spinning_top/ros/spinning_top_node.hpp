@@ -89,6 +89,7 @@ class SpinningTopNode {
   ros::Publisher clock_publisher_, status_publisher_;
   std::unique_ptr<tf2_ros::TransformBroadcaster> tf_broadcaster_;
   std::unique_ptr<tf2_ros::StaticTransformBroadcaster> static_broadcaster_;
+  bool static_sent_ = false;  // /tf_static has been published (then it is kept up to date)
   ros::ServiceServer reset_service_, reload_service_, pause_service_, resume_service_, step_service_,
       spawn_service_, kill_service_, set_state_service_;
   ros::WallTimer timer_, diagnostics_timer_;
