@@ -66,7 +66,7 @@ const std::vector<std::string>& node_setting_keys() {
       "rate", "real_time_factor", "max_lag", "tick_budget", "publish_clock", "clock_rate", "tf_rate",
       "start_paused", "wait_for_subscriber", "world_frame", "body_frame", "contact_frame", "marker_rate", "trace_length",
       "trace_resolution", "force_scale", "energy_drift_warning", "energy_drift_error", "quaternion_norm_error",
-      "constraint_error", "late_tick_warning", "real_time_factor_warning", "tops"};
+      "constraint_error", "late_tick_warning", "real_time_factor_warning", "tops", "reset_reads_parameters"};
   return keys;
 }
 

@@ -478,7 +478,17 @@ void SpinningTopNode::reconfigure(SpinningTopConfig& config, uint32_t /*level*/)
   ROS_INFO("spinning_top: %s", summary);
 }
 
-bool SpinningTopNode::on_reset(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& response) {
+bool SpinningTopNode::on_reset(std_srvs::Trigger::Request& request, std_srvs::Trigger::Response& response) {
+  // ~reset_reads_parameters (read at each call, so `rosparam set` switches it): ~reset is ~reload.
+  bool reads_parameters = false;
+  try {
+    reads_parameters = read_bool(private_nh_, "reset_reads_parameters", false);
+  } catch (const InvalidParameter& error) {
+    response.success = false;
+    response.message = std::string("reset refused: ~") + error.what();
+    return true;
+  }
+  if (reads_parameters) return on_reload(request, response);
   // Every top restarts at its start; the world's time (and so the stamps) goes on, so tf2
   // listeners see time go on (no jump back, no dropped buffers).
   for (const auto& top : tops_) top->reset(clock_.time());

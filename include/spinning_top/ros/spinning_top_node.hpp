@@ -52,7 +52,7 @@ class SpinningTopNode {
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& status);
   void reconfigure(SpinningTopConfig& config, uint32_t level);
 
-  bool on_reset(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& response);
+  bool on_reset(std_srvs::Trigger::Request& request, std_srvs::Trigger::Response& response);
   bool on_reload(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& response);
   bool on_pause(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& response);
   bool on_resume(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& response);
