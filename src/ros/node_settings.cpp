@@ -47,14 +47,29 @@ std::vector<std::string> read_top_names(const ros::NodeHandle& nh) {
   XmlRpc::XmlRpcValue value;
   std::vector<std::string> names;
   if (!nh.getParam("tops", value)) return names;
-  require(value.getType() == XmlRpc::XmlRpcValue::TypeArray, "tops", "must be a list of names, e.g. [slow, fast]");
+  if (value.getType() == XmlRpc::XmlRpcValue::TypeString) {
+    // roscpp's command line (`_tops:=[slow,fast]`) gives text, not a list: names between
+    // brackets, commas and spaces.
+    std::string name;
+    for (const char c : static_cast<std::string>(value) + ",") {
+      if (c == '[' || c == ']' || c == ',' || c == ' ') {
+        if (!name.empty()) names.push_back(name);
+        name.clear();
+      } else {
+        name += c;
+      }
+    }
+  } else {
+    require(value.getType() == XmlRpc::XmlRpcValue::TypeArray, "tops", "must be a list of names, e.g. [slow, fast]");
+    for (int i = 0; i < value.size(); ++i) {
+      require(value[i].getType() == XmlRpc::XmlRpcValue::TypeString, "tops", "must be a list of names, e.g. [slow, fast]");
+      names.push_back(static_cast<std::string>(value[i]));
+    }
+  }
   std::set<std::string> seen;
-  for (int i = 0; i < value.size(); ++i) {
-    require(value[i].getType() == XmlRpc::XmlRpcValue::TypeString, "tops", "must be a list of names, e.g. [slow, fast]");
-    const std::string name = static_cast<std::string>(value[i]);
+  for (const std::string& name : names) {
     require_top_name("tops", name);
     require(seen.insert(name).second, "tops", "'" + name + "' is listed twice");
-    names.push_back(name);
   }
   return names;
 }

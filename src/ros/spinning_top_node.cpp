@@ -80,13 +80,7 @@ SpinningTopNode::SpinningTopNode(ros::NodeHandle nh, ros::NodeHandle private_nh)
   // configuration before it advertises).
   const std::vector<std::pair<std::string, SceneConfig>> configs = read_tops();
   std::vector<Eigen::Vector2d> positions;
-  for (const auto& [name, config] : configs) {
-    (void)config;
-    const ros::NodeHandle top_nh(private_nh_, name);
-    positions.emplace_back(name.empty() ? 0.0 : read_number(top_nh, "x", 0.0),
-                           name.empty() ? 0.0 : read_number(top_nh, "y", 0.0));
-    if (!positions.back().allFinite()) throw InvalidParameter(name + "/x", "must be finite [m]");
-  }
+  for (const auto& named : configs) positions.push_back(read_tip_position(named.first));
   warn_about_unknown_keys(private_nh_, settings_.tops);
   paused_ = settings_.start_paused;
   waiting_for_subscriber_ = settings_.wait_for_subscriber;
@@ -167,6 +161,23 @@ std::vector<std::pair<std::string, SceneConfig>> SpinningTopNode::read_tops() co
     }
   }
   return configs;
+}
+
+Eigen::Vector2d SpinningTopNode::read_tip_position(const std::string& name) const {
+  Eigen::Vector2d xy = Eigen::Vector2d::Zero();
+  if (name.empty()) return xy;  // the node's own top starts at the origin
+  const ros::NodeHandle top_nh(private_nh_, name);
+  const char* const keys[] = {"x", "y"};
+  for (int i = 0; i < 2; ++i) {
+    const std::string key = name + "/" + keys[i];
+    try {
+      xy[i] = read_number(top_nh, keys[i], 0.0);
+    } catch (const InvalidParameter& error) {
+      throw InvalidParameter(key, reason_of(error));
+    }
+    if (!(std::abs(xy[i]) <= 1e6)) throw InvalidParameter(key, "must be finite and within 1e6 m of the origin");
+  }
+  return xy;
 }
 
 void SpinningTopNode::add_top(std::unique_ptr<TopInstance> top) {
@@ -506,11 +517,19 @@ bool SpinningTopNode::on_reload(std_srvs::Trigger::Request&, std_srvs::Trigger::
   // The scene keys are read again and validated for every top the parameters describe before
   // any top changes; tops spawned by ~spawn are reset.
   std::vector<std::pair<std::string, SceneConfig>> configs;
+  std::vector<Eigen::Vector2d> positions;
   try {
     configs = read_tops();
-    for (const auto& [name, config] : configs)
+    for (const auto& [name, config] : configs) {
       if (find_top(name) == nullptr)
         throw InvalidParameter("tops", "'" + name + "' is not running: ~tops is read at start only");
+      positions.push_back(read_tip_position(name));
+      try {
+        make_simulator(config);  // what restart() will build: it must not refuse half-way
+      } catch (const InvalidParameter& error) {
+        throw InvalidParameter((name.empty() ? "" : name + "/") + error.parameter(), reason_of(error));
+      }
+    }
   } catch (const InvalidParameter& error) {
     response.success = false;
     response.message = std::string("reload refused, nothing changed: ~") + error.what();
@@ -519,20 +538,10 @@ bool SpinningTopNode::on_reload(std_srvs::Trigger::Request&, std_srvs::Trigger::
   }
   for (const auto& top : tops_) {
     const auto it = std::find_if(configs.begin(), configs.end(), [&](const auto& c) { return c.first == top->name(); });
-    try {
-      if (it == configs.end())
-        top->reset(clock_.time());
-      else
-        top->restart(it->second, top->name().empty() ? Eigen::Vector2d::Zero()
-                                                     : Eigen::Vector2d(read_number(ros::NodeHandle(private_nh_, top->name()), "x", 0.0),
-                                                                       read_number(ros::NodeHandle(private_nh_, top->name()), "y", 0.0)),
-                     clock_.time());
-    } catch (const InvalidParameter& error) {
-      response.success = false;
-      response.message = std::string("reload refused for top '") + top->name() + "': ~" + error.what();
-      report("refused: " + response.message);
-      return true;
-    }
+    if (it == configs.end())
+      top->reset(clock_.time());
+    else
+      top->restart(it->second, positions[it - configs.begin()], clock_.time());
   }
   tick_unfinished_ = false;
   send_static_transforms();

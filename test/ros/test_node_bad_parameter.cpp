@@ -21,7 +21,8 @@ Outcome run_node(const std::string& name, const std::string& arguments, int seco
                                 name + " " + arguments);
 }
 
-void expect_refused(const std::string& name, const std::string& arguments, const std::string& parameter) {
+void expect_refused(const std::string& name, const std::string& arguments, const std::string& parameter,
+                    const std::string& reason = "") {
   ros::NodeHandle nh;
   Recorder<geometry_msgs::PointStamped> points(nh, "/" + name + "/contact_point");
   const Outcome outcome = run_node(name, arguments);
@@ -30,6 +31,7 @@ void expect_refused(const std::string& name, const std::string& arguments, const
   EXPECT_NE(outcome.output.find("FATAL"), std::string::npos) << outcome.output;
   EXPECT_NE(outcome.output.find("invalid parameter ~" + parameter + " "), std::string::npos)
       << "expected ~" << parameter << " named in:\n" << outcome.output;
+  EXPECT_NE(outcome.output.find(reason), std::string::npos) << "expected '" << reason << "' in:\n" << outcome.output;
   ros::WallDuration(0.2).sleep();
   EXPECT_EQ(points.size(), 0u) << arguments << ": published before exiting";
 }
@@ -43,6 +45,11 @@ TEST(NodeBadParameter, AxialInertiaAboveTwiceTransverse) {
 }
 TEST(NodeBadParameter, FrictionInTheFixedTipScene) { expect_refused("bad_friction", "_friction:=0.1", "friction"); }
 TEST(NodeBadParameter, TiltWithTheAxisBelowTheFloor) { expect_refused("bad_tilt", "_initial/tilt:=2.0", "initial/tilt"); }
+// Several tops (~tops): a name listed twice, a top's position that is not a number, a top's own
+// key named with its top.
+TEST(NodeBadParameter, TopListedTwice) { expect_refused("bad_tops", "_tops:=[a,a]", "tops", "listed twice"); }
+TEST(NodeBadParameter, TopPositionThatIsNotANumber) { expect_refused("bad_place", "_tops:=[a] _a/x:=far", "a/x"); }
+TEST(NodeBadParameter, TopKeyNamesItsTop) { expect_refused("bad_top_key", "_tops:=[a] _a/mass:=-1.0", "a/mass"); }
 TEST(NodeBadParameter, TiltOfTheWrongType) { expect_refused("bad_tilt_type", "_initial/tilt:=true", "initial/tilt"); }
 TEST(NodeBadParameter, UnknownScene) { expect_refused("bad_scene", "_scene:=ice", "scene"); }
 TEST(NodeBadParameter, UnknownIntegrator) { expect_refused("bad_integrator", "_integrator:=no_such_integrator", "integrator"); }

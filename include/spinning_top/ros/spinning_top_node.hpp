@@ -35,6 +35,9 @@ class SpinningTopNode {
  private:
   /// The configurations of the tops the parameters describe (the node's own, or ~tops).
   std::vector<std::pair<std::string, SceneConfig>> read_tops() const;
+  /// A named top's tip position at the start, ~<name>/x and ~<name>/y [m] (throws
+  /// InvalidParameter naming <name>/x or <name>/y); the origin for the node's own top.
+  Eigen::Vector2d read_tip_position(const std::string& name) const;
   void add_top(std::unique_ptr<TopInstance> top);
   TopInstance* find_top(const std::string& name);
 
