@@ -455,13 +455,13 @@ void SpinningTopNode::reconfigure(SpinningTopConfig& config, uint32_t /*level*/)
         const TopParameters new_top = changed_top(top->simulator().config().top);
         const IntegratorSettings new_integrator = changed_integrator(top->simulator().config().integrator);
         if (body_changed) {
-          const double spin = config.spin != old.spin ? config.spin : top->simulator().snapshot().body_rates.z();
+          const double spin = config.spin != old.spin ? config.spin : top->snapshot().body_rates.z();
           top->update(top->simulator().config().top, new_integrator);
           top->change_body(new_top, spin);
         } else if (top->update(new_top, new_integrator)) {
           // auto chose again for the current state (exact may refuse it now, or accept it again).
           ROS_WARN("spinning_top: the update switched the integrator of %s at t = %.9g s: now %s",
-                   top->name().empty() ? "the top" : top->name().c_str(), top->simulator().snapshot().time,
+                   top->name().empty() ? "the top" : top->name().c_str(), top->time(),
                    top->simulator().integrator_description().c_str());
         }
       } catch (const InvalidParameter& error) {

@@ -76,33 +76,34 @@ void TopInstance::start(const SceneConfig& config, double time_base, double worl
   simulator_ = std::move(simulator);
   time_base_ = time_base;
   origin_ = world_time;
+  now_ = simulator_->snapshot();
   rebaseline_energy();
+}
+
+void TopInstance::place_tip_at(const Eigen::Vector2d& tip_xy) {
+  offset_ = Vector3(tip_xy.x() - now_.outputs.contact_point.x(), tip_xy.y() - now_.outputs.contact_point.y(), 0.0);
 }
 
 void TopInstance::restart(const SceneConfig& config, const Eigen::Vector2d& tip_xy, double world_time) {
   if (!tip_xy.allFinite() || tip_xy.norm() > 1e6)
     throw InvalidParameter("x", "the tip's position must be finite and within 1e6 m of the origin");
+  const bool had_event = simulator_ && simulator_->event() != Event::kNone;
   start(config, 0.0, world_time);
   start_config_ = config;
   start_tip_xy_ = tip_xy;
-  const Vector3 tip = simulator_->snapshot().outputs.contact_point;
-  offset_ = Vector3(tip_xy.x() - tip.x(), tip_xy.y() - tip.y(), 0.0);
+  place_tip_at(tip_xy);
   trace_.clear();
-  if (reported_event_ != Event::kNone && event_publisher_) {
+  if (had_event) {
     std_msgs::String cleared;  // "": no event (the core's spelling of none)
     event_publisher_.publish(cleared);
   }
-  reported_event_ = Event::kNone;
 }
 
 void TopInstance::reset(double world_time) { restart(start_config_, start_tip_xy_, world_time); }
 
-Eigen::Vector2d TopInstance::tip_xy() const {
-  return world(simulator_->snapshot().outputs.contact_point).head<2>();
-}
-
 bool TopInstance::update(const TopParameters& top, const IntegratorSettings& integrator) {
   const bool switched = simulator_->update(top, integrator);  // validates; changes nothing if it throws
+  now_ = simulator_->snapshot();  // a new g or k changes R and the floor force of the same state
   start_config_.top.friction = top.friction;
   start_config_.top.gravity = top.gravity;
   start_config_.integrator = integrator;
@@ -114,7 +115,7 @@ void TopInstance::change_body(const TopParameters& top, double spin) {
   if (simulator_->event() != Event::kNone)
     throw InvalidParameter("mass", std::string("the top stopped at its ") + to_string(simulator_->event()) +
                                        " event: reset it before changing its body");
-  const Snapshot now = simulator_->snapshot();
+  const Snapshot now = now_;
   const EulerState e = euler_state(now.attitude, now.body_rates);
   SceneConfig config = simulator_->config();
   config.top = top;
@@ -133,15 +134,13 @@ void TopInstance::change_body(const TopParameters& top, double spin) {
   new_start.top = top;
   new_start.initial.spin = spin;
   validate(new_start);  // ~reset must still work with the new body
-  const Vector3 tip = world(now.outputs.contact_point);
+  const Eigen::Vector2d tip = world(now.outputs.contact_point).head<2>();
   // The new model starts where the old one is: at the world time of its state (an unfinished
   // tick has not reached the world's time yet).
   start(config, time_base_ + simulator_->time(), origin_ + simulator_->time());  // validates the state
   start_config_ = new_start;
   nh_.setParam("robot_description", top_urdf(top, body_frame_));
-  // The tip stays where it is: the new model's origin moves under it.
-  const Vector3 new_tip = simulator_->snapshot().outputs.contact_point;
-  offset_ = Vector3(tip.x() - new_tip.x(), tip.y() - new_tip.y(), 0.0);
+  place_tip_at(tip);  // the tip stays where it is: the new model's origin moves under it
 }
 
 bool TopInstance::advance(double world_time, const WorkBudget& budget) {
@@ -149,28 +148,28 @@ bool TopInstance::advance(double world_time, const WorkBudget& budget) {
   const double target = world_time - origin_;
   const Event event = simulator_->advance_to(target, budget);
   if (event == Event::kNone && simulator_->time() < target) return false;  // out of budget
+  now_ = simulator_->snapshot();
   if (event != Event::kNone) handle_event(event);
   return true;
 }
 
+double TopInstance::time() const { return time_base_ + now_.time; }
+
 void TopInstance::handle_event(Event event) {
-  reported_event_ = event;
-  event_time_ = time_base_ + simulator_->time();
   ROS_ERROR("spinning_top: %s%s%s at t = %.9g s (simulated): integration stopped; the last valid pose is "
             "kept. Call ~reset (or ~set_state) to start again.",
-            name_.empty() ? "" : "top ", name_.empty() ? "" : (name_ + ": ").c_str(), to_string(event), event_time_);
+            name_.empty() ? "" : "top ", name_.empty() ? "" : (name_ + ": ").c_str(), to_string(event), time());
   std_msgs::String message;
   message.data = to_string(event);
   event_publisher_.publish(message);
 }
 
 void TopInstance::rebaseline_energy() {
-  const ModelOutputs out = simulator_->snapshot().outputs;
-  energy_baseline_ = out.energy + out.dissipated_energy;
+  energy_baseline_ = now_.outputs.energy + now_.outputs.dissipated_energy;
 }
 
 void TopInstance::append_transforms(const ros::Time& stamp, std::vector<geometry_msgs::TransformStamped>& out) const {
-  const Snapshot s = simulator_->snapshot();
+  const Snapshot& s = now_;
   geometry_msgs::TransformStamped body;
   body.header.stamp = stamp;
   body.header.frame_id = settings_.world_frame;
@@ -192,13 +191,13 @@ geometry_msgs::TransformStamped TopInstance::contact_transform(const ros::Time& 
   contact.header.stamp = stamp;
   contact.header.frame_id = settings_.world_frame;
   contact.child_frame_id = contact_frame_;
-  contact.transform.translation = to_vector(world(simulator_->snapshot().outputs.contact_point));
+  contact.transform.translation = to_vector(world(now_.outputs.contact_point));
   contact.transform.rotation.w = 1.0;
   return contact;
 }
 
 bool TopInstance::publish(const ros::Time& stamp, bool with_markers) {
-  const Snapshot s = simulator_->snapshot();
+  const Snapshot& s = now_;
   if (!finite(s)) {  // the core promises this never happens; never pass it on
     ROS_ERROR_ONCE("spinning_top: non-finite state at t = %.9g s not published", s.time);
     return false;
@@ -233,7 +232,7 @@ bool TopInstance::publish(const ros::Time& stamp, bool with_markers) {
     spinning_top::TopState state;
     state.header = point.header;
     state.name = name_;
-    state.time = time_base_ + s.time;
+    state.time = time();
     state.tilt = e.tilt;
     state.heading = e.heading;
     state.spin_angle = e.spin_angle;
@@ -268,7 +267,7 @@ bool TopInstance::publish(const ros::Time& stamp, bool with_markers) {
 
 void TopInstance::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) const {
   using diagnostic_msgs::DiagnosticStatus;
-  const Snapshot s = simulator_->snapshot();
+  const Snapshot& s = now_;
   const ModelOutputs& out = s.outputs;
   const Monitors m = monitors(s, simulator_->config(), energy_baseline_);
   if (std::abs(m.energy_balance) > settings_.energy_drift_error)
@@ -279,8 +278,9 @@ void TopInstance::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) 
     status.mergeSummaryf(DiagnosticStatus::ERROR, "quaternion norm off by %.3g", m.quaternion_norm_error);
   if (m.constraint_residual > settings_.constraint_error)
     status.mergeSummaryf(DiagnosticStatus::ERROR, "contact constraint residual %.3g m", m.constraint_residual);
-  if (reported_event_ != Event::kNone)
-    status.mergeSummaryf(DiagnosticStatus::ERROR, "event %s at t = %.9g s", to_string(reported_event_), event_time_);
+  const Event stopped = simulator_->event();  // the run ends at the event: time() is its time
+  if (stopped != Event::kNone)
+    status.mergeSummaryf(DiagnosticStatus::ERROR, "event %s at t = %.9g s", to_string(stopped), time());
 
   if (!name_.empty()) status.add("top", name_);
   status.add("scene", to_string(simulator_->config().scene));
@@ -290,9 +290,9 @@ void TopInstance::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) 
   status.add("integrator method", to_string(choice.method));
   if (choice.fallback) status.add("integrator fallback reason", choice.reason);
   status.add("integrator steps since reset", simulator_->steps());
-  status.addf("simulated time [s]", "%.9g", time_base_ + s.time);
-  status.add("event", reported_event_ == Event::kNone ? "none" : to_string(reported_event_));
-  if (reported_event_ != Event::kNone) status.addf("event time [s]", "%.9g", event_time_);
+  status.addf("simulated time [s]", "%.9g", time());
+  status.add("event", stopped == Event::kNone ? "none" : to_string(stopped));
+  if (stopped != Event::kNone) status.addf("event time [s]", "%.9g", time());
   status.addf("energy [J]", "%.12g", out.energy);
   status.addf("dissipated energy [J]", "%.12g", out.dissipated_energy);
   status.addf("energy balance (E + W - E0) / |E0|", "%.3g", m.energy_balance);

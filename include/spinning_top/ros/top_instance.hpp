@@ -61,8 +61,10 @@ class TopInstance {
   /// attitude, the other rates, the tip's place and the simulated time go on. Refused (throws
   /// InvalidParameter, nothing changes) for an invalid body or state, or after a validity event.
   void change_body(const TopParameters& top, double spin);
-  /// The tip's position on the floor now [m].
-  Eigen::Vector2d tip_xy() const;
+  /// [s] the top's simulated time: since its start, reset or set_state (live body changes go on).
+  double time() const;
+  /// The state at time(), taken once per change of it (every publication of a tick reads it).
+  const Snapshot& snapshot() const { return now_; }
 
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) const;
   Event event() const { return simulator_->event(); }
@@ -74,6 +76,8 @@ class TopInstance {
  private:
   /// Replaces the simulator (validated first) and rebaselines the energy.
   void start(const SceneConfig& config, double time_base, double world_time);
+  /// The core's origin on the floor such that the current contact point is at tip_xy.
+  void place_tip_at(const Eigen::Vector2d& tip_xy);
   void handle_event(Event event);
   void rebaseline_energy();
   /// The core's position in the world frame (the top's place on the floor added).
@@ -85,12 +89,11 @@ class TopInstance {
   SceneConfig start_config_;
   Eigen::Vector2d start_tip_xy_ = Eigen::Vector2d::Zero();
   std::unique_ptr<Simulator> simulator_;
+  Snapshot now_;  // simulator_->snapshot(), refreshed whenever the simulator changes
   Vector3 offset_ = Vector3::Zero();  // the core's origin in the world frame (on the floor)
   double origin_ = 0.0;     // [s] world time of the simulator's time 0
   double time_base_ = 0.0;  // [s] the top's time at the simulator's time 0 (live body changes)
   double energy_baseline_ = 0.0;
-  Event reported_event_ = Event::kNone;
-  double event_time_ = 0.0;
   std::deque<Vector3> trace_;
   ros::NodeHandle nh_;  // ~ or ~<name>
   ros::Publisher contact_point_publisher_, normal_force_publisher_, twist_publisher_, state_publisher_,
