@@ -13,6 +13,7 @@ import re
 import socket
 import subprocess
 import sys
+import threading
 import time
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
@@ -49,8 +50,6 @@ class WorldTimes:
         self.process = subprocess.Popen(["rostopic", "echo", "/diagnostics"], env=env, stdout=subprocess.PIPE,
                                         stderr=subprocess.DEVNULL, text=True, bufsize=1)
         self.samples = []
-        import threading
-
         self.thread = threading.Thread(target=self._read, daemon=True)
         self.thread.start()
 

@@ -13,6 +13,7 @@ is the message stamp (simulated time under use_sim_time).
 """
 
 import argparse
+import os
 import sys
 import time
 
@@ -69,9 +70,12 @@ def read_bag(path, topics, fields, show_path):
     import rosbag
 
     series = {topic: Series(topic, fields, show_path) for topic in topics}
-    with rosbag.Bag(path) as bag:
-        for topic, message, _ in bag.read_messages(topics=list(topics)):
-            series[topic].add(message)
+    try:
+        with rosbag.Bag(path) as bag:
+            for topic, message, _ in bag.read_messages(topics=list(topics)):
+                series[topic].add(message)
+    except rosbag.ROSBagException as error:  # not a bag, or a damaged one
+        raise ValueError(f"{path}: {error}") from None
     empty = [topic for topic, s in series.items() if len(s) == 0]
     if empty:
         raise ValueError(f"{path}: no message on {', '.join(empty)}")
@@ -119,9 +123,12 @@ def record_live(topics, fields, show_path, duration, live_figure):
     the figure about twice a second when there is a window."""
     import threading
 
+    import rosgraph
     import rospy
     from spinning_top.msg import TopState
 
+    if not rosgraph.is_master_online():  # rospy would wait for one forever
+        raise ValueError(f"no ROS master at {rosgraph.get_master_uri()} (start the node, or give --bag)")
     rospy.init_node("spinning_top_plot", anonymous=True, disable_signals=True)
     series = [Series(topic, fields, show_path) for topic in topics]
     lock = threading.Lock()
@@ -179,8 +186,6 @@ def main(argv=None):
         parser.error("--duration must be > 0 s")
     if args.bag is None and args.duration is None and args.no_show:
         parser.error("live with --no-show needs --duration")
-    import os
-
     import matplotlib
 
     show = not args.no_show and bool(os.environ.get("DISPLAY"))

@@ -69,6 +69,16 @@ class PlotBag(unittest.TestCase):
         self.assertGreater(count, 500)  # 2 s of wall time at 500 Hz and real-time factor 1
         self.assertGreater(os.path.getsize(png), 20000)
 
+    def test_refuses_a_file_that_is_not_a_bag(self):
+        not_a_bag = os.path.join(self.directory, "not_a.bag")
+        with open(not_a_bag, "w") as f:
+            f.write("garbage\n")
+        result = subprocess.run(["rosrun", "spinning_top", "plot", "--bag", not_a_bag, "--no-show"],
+                                capture_output=True, text=True, timeout=120)
+        self.assertEqual(result.returncode, 1, result.stderr)
+        self.assertIn(f"plot: {not_a_bag}: ", result.stderr)
+        self.assertNotIn("Traceback", result.stderr)
+
     def test_refuses_a_field_that_is_not_a_number(self):
         for field in ("nonsense", "event", "contact_point"):
             result = self.plot("--fields", field, "--output", os.path.join(self.directory, "bad.png"))
