@@ -13,7 +13,7 @@
 #include "spinning_top/integrator_registry.hpp"
 #include "spinning_top/integrators/dop853.hpp"
 #include "spinning_top/integrators/dormand_prince.hpp"
-#include "spinning_top/integrators/exact.hpp"
+#include "spinning_top/integrators/exact_driver.hpp"
 #include "spinning_top/integrators/gauss.hpp"
 #include "spinning_top/integrators/radau.hpp"
 #include "spinning_top/integrators/rk4.hpp"
