@@ -78,6 +78,10 @@ def simulate_cases():
                                    "--set", "initial/tilt=0.8", "--set", "friction=2000"],
         # An invalid state at release: one row with its event.
         "lift_off/at_release": ["--config", "config/fixed_tip.yaml", "--set", "initial/nutation_rate=200"],
+        # A state exact refuses (nothing drives the nutation): auto runs its fallback, dop853, and
+        # says why on the first line.
+        "fallback/frictionless/weightless_at_rest": ["--config", "config/frictionless.yaml", "--set", "gravity=0",
+                                                     "--set", "initial/spin=0"],
         # The axis vertical while it moves: exact through the pole of its Euler angles.
         "vertical_moving/fixed_tip": ["--config", "config/fixed_tip.yaml", "--set", "initial/tilt=0",
                                "--set", "initial/nutation_rate=1"],
