@@ -30,7 +30,7 @@
 #include <string>
 #include <vector>
 
-#include "spinning_top/drivers.hpp"
+#include "spinning_top/integrators/registry_rows.hpp"
 #include "spinning_top/integrators/radau.hpp"
 #include "spinning_top/scenes/viscous.hpp"
 #include "spinning_top/simulator.hpp"

@@ -5,6 +5,7 @@
 
 #include <utility>
 
+#include "spinning_top/auto_driver.hpp"  // the auto row's driver, for its kind
 #include "spinning_top/integrators/registry_rows.hpp"
 
 namespace spinning_top {

@@ -25,16 +25,16 @@ namespace scene_factory {
 /// per state), the others from the integrator settings as given.
 template <class Driver>
 Driver make_driver(const SceneConfig& config) {
-  if constexpr (kind_of_driver<Driver>() == IntegratorKind::kAutomatic)
+  if constexpr (Driver::kKind == IntegratorKind::kAutomatic)
     return Driver(config);
   else
-    return spinning_top::make_driver<Driver>(config.integrator);
+    return Driver(config.integrator);
 }
 
 template <class Model, class Driver>
 class SceneSimulator final : public Simulator {
  public:
-  static constexpr bool kAutomatic = kind_of_driver<Driver>() == IntegratorKind::kAutomatic;
+  static constexpr bool kAutomatic = Driver::kKind == IntegratorKind::kAutomatic;
 
   explicit SceneSimulator(const SceneConfig& config)
       : config_(config), model_(config.top, config.initial), driver_(make_driver<Driver>(config)) {

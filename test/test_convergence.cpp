@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "core_test_support.hpp"
-#include "spinning_top/drivers.hpp"
+#include "spinning_top/integrators/registry_rows.hpp"
 #include "spinning_top/integrators/dormand_prince.hpp"
 #include "spinning_top/scenes/fixed_tip.hpp"
 
@@ -115,7 +115,7 @@ TEST(AdaptiveConvergence, DenseOutputBetweenStepsIsAsAccurateAsTheSteps) {
       ASSERT_EQ(driver.advance_to(model, duration * i / 300000), Event::kNone);
       ASSERT_LE(driver.steps(), steps + 1) << "a request spanned two steps: grid too coarse";
       if (driver.steps() > steps) {
-        end += driver.last_step();  // the driver's own t + dt, the same rounding
+        end += driver.stepper().last_step();  // the driver's own t + dt, the same rounding
         ends.push_back(end);
         steps = driver.steps();
       }

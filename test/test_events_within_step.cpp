@@ -1,6 +1,6 @@
 // Events inside a step (doc/integrators.md, "Events"): R can dip below zero and come back within
 // one step, leaving no sign change at the step's ends. The drivers bound the event functions over
-// every step through its interpolant (events.hpp, EventMonitor), so such a lift-off is reported
+// every step through its interpolant (integration/event_locator.hpp, EventLocator), so such a lift-off is reported
 // at its root, whatever the method and the output rate. References: the closed form (`exact`)
 // for the fixed tip and the frictionless top; for the viscous top, dop853 at tight tolerances.
 #include <gtest/gtest.h>
@@ -12,7 +12,7 @@
 #include <vector>
 
 #include "core_test_support.hpp"
-#include "spinning_top/drivers.hpp"
+#include "spinning_top/integrators/registry_rows.hpp"
 #include "spinning_top/events.hpp"
 #include "spinning_top/integrators/dop853.hpp"
 #include "spinning_top/integrators/splitting.hpp"
@@ -320,9 +320,9 @@ TEST(EventScreen, ClearsEveryStepFarFromAnyEvent) {
   fixed.reset(fixed_tip, 0.0, fixed_tip.initial_state());
   EXPECT_EQ(fixed.advance_to(fixed_tip, 10.0), Event::kNone);
   std::printf("[ measured ] searched steps over 10 s: viscous dop853 %ld of %ld, fixed tip splitting6 %ld of %ld\n",
-              adaptive.event_monitor().searches(), adaptive.steps(), fixed.event_monitor().searches(), fixed.steps());
-  EXPECT_EQ(adaptive.event_monitor().searches(), 0);
-  EXPECT_EQ(fixed.event_monitor().searches(), 0);
+              adaptive.event_locator().searches(), adaptive.steps(), fixed.event_locator().searches(), fixed.steps());
+  EXPECT_EQ(adaptive.event_locator().searches(), 0);
+  EXPECT_EQ(fixed.event_locator().searches(), 0);
 
   // The viscous reproduction's dip, inside a step: searched, and only a few steps are.
   TopParameters kicked = viscous_top;
@@ -334,9 +334,9 @@ TEST(EventScreen, ClearsEveryStepFarFromAnyEvent) {
   adaptive.reset(dipping, 0.0, dipping.initial_state());
   EXPECT_EQ(adaptive.advance_to(dipping, 1.0), Event::kLiftOff);
   std::printf("[ measured ] viscous reproduction: %ld of %ld steps searched, %ld evaluations of the dense output\n",
-              adaptive.event_monitor().searches(), adaptive.steps(), adaptive.event_monitor().interpolant_evaluations());
-  EXPECT_GE(adaptive.event_monitor().searches(), 1);
-  EXPECT_LE(adaptive.event_monitor().searches(), 6);
+              adaptive.event_locator().searches(), adaptive.steps(), adaptive.event_locator().interpolant_evaluations());
+  EXPECT_GE(adaptive.event_locator().searches(), 1);
+  EXPECT_LE(adaptive.event_locator().searches(), 6);
 }
 
 }  // namespace

@@ -12,7 +12,7 @@
 #include "core_test_support.hpp"
 #include "extreme_cases.hpp"
 #include "reference_solution.hpp"
-#include "spinning_top/integrators/exact_driver.hpp"
+#include "spinning_top/integrators/exact_stepper.hpp"
 #include "spinning_top/scenes/frictionless.hpp"
 #include "spinning_top/simulator.hpp"
 

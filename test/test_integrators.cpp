@@ -9,7 +9,7 @@
 #include <cmath>
 #include <string>
 
-#include "spinning_top/drivers.hpp"
+#include "spinning_top/integrators/registry_rows.hpp"
 #include "spinning_top/integrator_registry.hpp"
 #include "spinning_top/integrators/dop853.hpp"
 #include "spinning_top/integrators/dormand_prince.hpp"

@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "core_test_support.hpp"
-#include "spinning_top/drivers.hpp"
+#include "spinning_top/integrators/registry_rows.hpp"
 #include "spinning_top/integrators/dop853.hpp"
 #include "spinning_top/integrators/radau.hpp"
 #include "spinning_top/scenes/viscous.hpp"
@@ -205,7 +205,7 @@ TEST(Radau5, KeepsTheJacobianWhenNewtonContractsFastAndSolvesTurningStiffnessPer
     AdaptiveDriver<Viscous, Radau> driver(1e-12);
     driver.reset(model, 0.0, model.initial_state());
     ASSERT_EQ(driver.advance_to(model, 1.0), Event::kNone);
-    const RadauStatistics& s = driver.method().statistics();
+    const RadauStatistics& s = driver.stepper().method().statistics();
     std::printf("[ measured ] k = %g: %ld steps, %ld rejected, %ld Jacobians, %ld decompositions, %ld per-stage, "
                 "%.2f Newton iterations per attempt\n",
                 k, driver.steps(), driver.rejected_steps(), s.jacobians, s.decompositions, s.per_stage_attempts,

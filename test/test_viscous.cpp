@@ -10,7 +10,7 @@
 #include <string>
 
 #include "core_test_support.hpp"
-#include "spinning_top/drivers.hpp"
+#include "spinning_top/integrators/registry_rows.hpp"
 #include "spinning_top/integrators/radau.hpp"
 #include "spinning_top/scenes/viscous.hpp"
 

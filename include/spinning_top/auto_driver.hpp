@@ -1,169 +1,122 @@
 // The driver of `integrator: auto`: it runs auto's plan (auto_plan(), simulator.hpp) on the
 // scene's own drivers. At every (re)start, reset() or a live update, it starts the plan's first
-// choice from the current state and, if that one refuses the state (exact:
-// InvalidParameter("integrator", why)), the plan's fallback from the same state, and keeps what
-// it chose and why (choice()). To SceneSimulator it is just another driver.
-// The candidates live in one std::variant with one alternative per IntegratorType, the registry's
-// driver where the row serves the scene and an empty placeholder elsewhere, so that the rule
-// (auto_plan) can name any integrator the scene has without a second list here.
+// choice from the current state and, if that one refuses the state (MethodRefusal: exact's
+// degenerate states), the plan's fallback from the same state, and keeps what it chose and why
+// (choice()). To SceneSimulator it is just another driver.
+// Its candidates are the drivers of the integrators auto may choose (kAutoCandidates) that serve
+// the scene: exact and dop853 for the integrable scenes, dop853 and radau5 for the viscous one.
 #pragma once
 
+#include <iterator>
 #include <stdexcept>
 #include <string>
+#include <tuple>
 #include <utility>
 #include <variant>
 
 #include "spinning_top/integrators/registry_rows.hpp"
+#include "spinning_top/method_refusal.hpp"
 #include "spinning_top/simulator.hpp"
 
 namespace spinning_top {
 
-/// Builds a driver from the settings it runs with (auto's plan gives them per candidate).
-template <class Driver>
-Driver make_driver(const IntegratorSettings& settings) {
-  constexpr IntegratorKind kind = kind_of_driver<Driver>();
-  static_assert(kind != IntegratorKind::kAutomatic, "AutoDriver is built from the whole SceneConfig");
-  if constexpr (kind == IntegratorKind::kClosedForm) {
-    return Driver();
-  } else if constexpr (kind == IntegratorKind::kAdaptive) {
-    return Driver(settings.tolerance);
-  } else {
-    return Driver(settings.step);
-  }
-}
-
 template <class Model>
 class AutoDriver {
-  /// Stands for an integrator that does not serve this scene (and for auto itself).
-  struct Unserved {};
+  /// A candidate's driver, tagged with its integrator.
   template <IntegratorType type>
-  using Candidate = std::conditional_t<type != IntegratorType::kAuto && serves<type, Model>(), DriverFor<Model, type>,
-                                       Unserved>;
-  template <int... index>
-  static auto candidates(std::integer_sequence<int, index...>)
-      -> std::variant<Candidate<static_cast<IntegratorType>(index)>...>;
-  /// Alternative i is the driver of IntegratorType(i).
-  using Candidates = decltype(candidates(std::make_integer_sequence<int, kIntegratorCount>()));
+  struct Candidate {
+    static constexpr IntegratorType kType = type;
+    using Driver = DriverFor<Model, type>;
+    Driver driver;
+  };
+  /// std::variant of the Candidates of kAutoCandidates that serve the scene.
+  template <std::size_t... i>
+  static auto served(std::index_sequence<i...>)
+      -> decltype(std::tuple_cat(std::declval<std::conditional_t<serves<kAutoCandidates[i], Model>(),
+                                                                 std::tuple<Candidate<kAutoCandidates[i]>>,
+                                                                 std::tuple<>>>()...));
+  template <class... C>
+  static auto as_variant(std::tuple<C...>*) -> std::variant<C...>;
+  using Candidates = decltype(as_variant(
+      static_cast<decltype(served(std::make_index_sequence<std::size(kAutoCandidates)>()))*>(nullptr)));
 
  public:
   using State = typename Model::State;
+  static constexpr IntegratorKind kKind = IntegratorKind::kAutomatic;
 
-  explicit AutoDriver(const SceneConfig& config) : plan_(auto_plan(config)) {}
+  explicit AutoDriver(const SceneConfig& config) : plan_(auto_plan(config)), driver_(make(plan_.first)) {}
 
   /// (Re)starts at (t, y) with the plan's first choice, or with its fallback if the first refuses
-  /// this state (InvalidParameter "integrator"). A plan without fallback (viscous: its methods
-  /// refuse no state) lets a refusal through, as does any other exception.
+  /// this state. A plan without fallback (viscous: its methods refuse no state) lets a refusal
+  /// through, as does any other exception; the driver is then left as it was.
   void reset(const Model& model, double t, const State& y) {
     try {
       start(plan_.first, model, t, y);
       choice_ = {IntegratorType::kAuto, plan_.first.type, false, plan_.reason};
-    } catch (const InvalidParameter& refusal) {
-      if (refusal.parameter() != "integrator" || plan_.fallback.type == IntegratorType::kAuto) throw;
+    } catch (const MethodRefusal& refusal) {
+      if (plan_.fallback.type == IntegratorType::kAuto) throw;
       start(plan_.fallback, model, t, y);
-      choice_ = {IntegratorType::kAuto, plan_.fallback.type, true, reason_of(refusal)};
+      choice_ = {IntegratorType::kAuto, plan_.fallback.type, true, refusal.reason()};
     }
   }
 
   Event advance_to(const Model& model, double t, const WorkBudget& budget = WorkBudget()) {
-    return visit([&](auto& driver) { return driver.advance_to(model, t, budget); });
+    return std::visit([&](auto& c) { return c.driver.advance_to(model, t, budget); }, driver_);
   }
   double time() const {
-    return visit([](const auto& driver) { return driver.time(); });
+    return std::visit([](const auto& c) { return c.driver.time(); }, driver_);
   }
   const State& state() const {
-    return visit([](const auto& driver) -> const State& { return driver.state(); });
+    return std::visit([](const auto& c) -> const State& { return c.driver.state(); }, driver_);
   }
   Event event() const {
-    return visit([](const auto& driver) { return driver.event(); });
+    return std::visit([](const auto& c) { return c.driver.event(); }, driver_);
   }
   long steps() const {
-    return visit([](const auto& driver) { return driver.steps(); });
+    return std::visit([](const auto& c) { return c.driver.steps(); }, driver_);
   }
   void stop(Event event) {
-    visit([&](auto& driver) { driver.stop(event); });
+    std::visit([&](auto& c) { c.driver.stop(event); }, driver_);
   }
 
   /// The running driver's description, and why it runs: e.g. "exact: closed form, ...", or
   /// "dop853, tolerance 1e-12 (exact refused: the axis is vertical while it moves ...)".
   std::string description() const {
-    const std::string running = visit([](const auto& driver) { return driver.description(); });
+    const std::string running = std::visit([](const auto& c) { return c.driver.description(); }, driver_);
     if (choice_.fallback) return running + " (" + to_string(plan_.first.type) + " refused: " + choice_.reason + ")";
     return choice_.reason.empty() ? running : running + " (" + choice_.reason + ")";
   }
   const IntegratorChoice& choice() const { return choice_; }
   std::optional<ClosedFormRange> closed_form_range() const {
-    return visit([](const auto& driver) { return driver.closed_form_range(); });
+    return std::visit([](const auto& c) { return c.driver.closed_form_range(); }, driver_);
   }
 
  private:
-  /// Emplaces the candidate of settings.type and starts it at (t, y); throws what its reset throws.
+  /// The candidate of settings.type, not started.
   template <std::size_t index = 0>
-  void start(const IntegratorSettings& settings, const Model& model, double t, const State& y) {
+  static Candidates make(const IntegratorSettings& settings) {
     if constexpr (index < std::variant_size_v<Candidates>) {
-      using Driver = std::variant_alternative_t<index, Candidates>;
-      if constexpr (!std::is_same_v<Driver, Unserved>) {
-        if (settings.type == static_cast<IntegratorType>(index)) {
-          // The running candidate restarts in place (reset() keeps its settings, and exact's
-          // reset() to the state it was built from reuses its series and interpolation).
-          if (driver_.index() == index)
-            std::get<index>(driver_).reset(model, t, y);
-          else
-            driver_.template emplace<index>(make_driver<Driver>(settings)).reset(model, t, y);
-          return;
-        }
-      }
-      start<index + 1>(settings, model, t, y);
+      using C = std::variant_alternative_t<index, Candidates>;
+      if (settings.type == C::kType) return Candidates(std::in_place_index<index>, C{typename C::Driver(settings)});
+      return make<index + 1>(settings);
     } else {
-      throw std::logic_error(std::string("auto: planned ") + to_string(settings.type) + ", which does not serve " +
-                             Model::kName);
+      throw std::logic_error(std::string("auto: planned ") + to_string(settings.type) + ", which is not among "
+                             "kAutoCandidates serving " + Model::kName);
     }
   }
 
-  /// A driver of this scene, for the result types of visit().
-  template <std::size_t index = 1>
-  static constexpr std::size_t first_served() {
-    if constexpr (std::is_same_v<std::variant_alternative_t<index, Candidates>, Unserved>)
-      return first_served<index + 1>();
-    else
-      return index;
-  }
-  using Served = std::variant_alternative_t<first_served(), Candidates>;
-
-  /// Calls f on the running driver (never a placeholder once reset() has run).
-  template <class F>
-  decltype(auto) visit(F&& f) const {
-    using Result = decltype(f(std::declval<const Served&>()));
-    return std::visit(
-        [&](const auto& driver) -> Result {
-          if constexpr (std::is_same_v<std::decay_t<decltype(driver)>, Unserved>)
-            throw std::logic_error("auto: used before reset()");
-          else
-            return f(driver);
-        },
-        driver_);
-  }
-  template <class F>
-  decltype(auto) visit(F&& f) {
-    using Result = decltype(f(std::declval<Served&>()));
-    return std::visit(
-        [&](auto& driver) -> Result {
-          if constexpr (std::is_same_v<std::decay_t<decltype(driver)>, Unserved>)
-            throw std::logic_error("auto: used before reset()");
-          else
-            return f(driver);
-        },
-        driver_);
-  }
-
-  /// The refusal without its key ("integrator: "), the refusing method's own name prefix and
-  /// its advice to the user ("; use dop853"), which auto has just followed.
-  std::string reason_of(const InvalidParameter& refusal) const {
-    std::string why = refusal.what();
-    for (const std::string& prefix : {refusal.parameter() + ": ", std::string(to_string(plan_.first.type)) + ": "})
-      if (why.compare(0, prefix.size(), prefix) == 0) why.erase(0, prefix.size());
-    const std::size_t advice = why.rfind("; use ");
-    if (advice != std::string::npos) why.erase(advice);
-    return why;
+  /// Starts the candidate of settings.type at (t, y); throws what its reset throws, and then
+  /// leaves the running driver as it was. The running candidate restarts in place (exact's
+  /// restart to the state it was built from reuses its series and interpolation).
+  void start(const IntegratorSettings& settings, const Model& model, double t, const State& y) {
+    const bool running = std::visit([&](const auto& c) { return c.kType == settings.type; }, driver_);
+    if (running) {
+      std::visit([&](auto& c) { c.driver.reset(model, t, y); }, driver_);
+      return;
+    }
+    Candidates next = make(settings);
+    std::visit([&](auto& c) { c.driver.reset(model, t, y); }, next);
+    driver_ = std::move(next);
   }
 
   AutoPlan plan_;

@@ -93,6 +93,11 @@ constexpr double kAutoFallbackTolerance = 1e-12;
 /// Fixed-step choices run at min(step, largest_fixed_step / 2): auto is never refused a step.
 AutoPlan auto_plan(const SceneConfig& config);
 
+/// The integrators auto_plan() chooses among, as first choices or fallbacks: auto's driver
+/// (auto_driver.hpp) holds the drivers of those that serve its scene, and no other.
+inline constexpr IntegratorType kAutoCandidates[] = {IntegratorType::kExact, IntegratorType::kDop853,
+                                                     IntegratorType::kRadau5};
+
 /// Which method runs, and why.
 struct IntegratorChoice {
   IntegratorType configured = IntegratorType::kAuto;  ///< the `integrator` setting

@@ -11,6 +11,7 @@
 #include <cmath>
 
 #include "spinning_top/hot_path.hpp"
+#include "spinning_top/integration/controllers.hpp"
 
 namespace spinning_top {
 
@@ -20,8 +21,8 @@ class DormandPrince853 {
   using State = typename Model::State;
   static constexpr int kOrder = 8;
   static constexpr int kEmbeddedOrder = 7;  // Hairer's combined 5th/3rd-order estimate scales as dt^8
+  using Controller = PiController<kEmbeddedOrder + 1>;  // the estimate is O(dt^(kEmbeddedOrder + 1))
   static constexpr int kStagesPerStep = 12;
-  static constexpr bool kLazyDense = true;  // dense() needs complete_dense() first
   static constexpr const char* kName = "dop853";
 
   struct Attempt {
@@ -56,6 +57,9 @@ class DormandPrince853 {
     const double ratio = denominator > 0.0 ? std::sqrt(n5) / denominator : 1.0;
     out.error = (dt * ratio) * err5;
   }
+
+  /// Nothing is kept from step to step.
+  void restart() {}
 
   /// Continuous extension of the step just accepted, first part: the cubic Hermite terms,
   /// which need no more evaluations of f. dense() needs complete_dense() as well.

@@ -8,6 +8,7 @@
 #include <cmath>
 
 #include "spinning_top/hot_path.hpp"
+#include "spinning_top/integration/controllers.hpp"
 
 namespace spinning_top {
 
@@ -17,6 +18,7 @@ class DormandPrince54 {
   using State = typename Model::State;
   static constexpr int kOrder = 5;          // order of the propagated solution
   static constexpr int kEmbeddedOrder = 4;  // order of the error estimate
+  using Controller = PiController<kEmbeddedOrder + 1>;  // the estimate is O(dt^(kEmbeddedOrder + 1))
   static constexpr int kStagesPerStep = 6;  // FSAL: the seventh stage is the next step's first
   static constexpr const char* kName = "dopri5";
 
@@ -32,6 +34,9 @@ class DormandPrince54 {
     State r1, r2, r3, r4, r5;
     double t0 = 0.0, dt = 0.0;
   };
+
+  /// Nothing is kept from step to step.
+  void restart() {}
 
   SPINNING_TOP_FLATTEN void attempt(const Model& model, const State& y0, const State& f0, double dt, Attempt& out) {
     model.derivative(y0 + dt * (a21 * f0), k2_);
@@ -56,6 +61,9 @@ class DormandPrince54 {
     d.t0 = t0;
     d.dt = dt;
   }
+
+  /// The continuous extension needs nothing beyond prepare_dense().
+  void complete_dense(const Model& /*model*/, DenseStep& /*d*/) {}
 
   /// y(t0 + theta dt), fourth order, theta in [0, 1].
   SPINNING_TOP_FLATTEN static State dense(const DenseStep& d, double t) {

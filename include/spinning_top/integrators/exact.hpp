@@ -81,11 +81,11 @@
 #include <type_traits>
 #include <vector>
 
-#include "spinning_top/drivers.hpp"
 #include "spinning_top/events.hpp"
 #include "spinning_top/integrators/chebyshev.hpp"
 #include "spinning_top/integrators/elliptic.hpp"
 #include "spinning_top/kinematics.hpp"
+#include "spinning_top/method_refusal.hpp"
 #include "spinning_top/parameters.hpp"
 #include "spinning_top/scenes/fixed_tip.hpp"
 #include "spinning_top/scenes/frictionless.hpp"
@@ -519,17 +519,16 @@ class ExactSolution {
     // mu^2 = kappa (u3 - u1); for kappa = 0 (u3 -> infinity) its limit -f2 (Vieta).
     mu2_ = kappa_ > 0.0 ? kappa_ * (one_minus_u1_ - one_minus_u3_) : -f2_;  // (u3 - 1) + (1 - u1)
     if (!(mu2_ > 0.0) || !std::isfinite(mu2_))
-      throw InvalidParameter("integrator", "exact: nothing drives the nutation (no gravity torque, no spin and no "
+      throw MethodRefusal("exact", "nothing drives the nutation (no gravity torque, no spin and no "
                                            "transverse motion: the cubic vanishes, kappa (u3 - u1) = " +
-                                               exact_detail::format(mu2_) + ", and the phase is undefined); use dop853");
+                                               exact_detail::format(mu2_) + ", and the phase is undefined)", "dop853");
     mu_ = std::sqrt(mu2_);
     // k'^2 = (u3 - u2)/(u3 - u1): near the separatrix both u3 - 1 and 1 - u2 are small.
     const double complement =
         kappa_ > 0.0 ? std::sqrt((one_minus_u2_ - one_minus_u3_) / (one_minus_u1_ - one_minus_u3_)) : 1.0;
     if (!(complement > 0.0))
-      throw InvalidParameter("integrator",
-                             "exact: the motion lies on the separatrix (k = 1: it approaches the unstable vertical "
-                             "for ever and its period is infinite); use dop853");
+      throw MethodRefusal("exact", "the motion lies on the separatrix (k = 1: it approaches the unstable vertical "
+                             "for ever and its period is infinite)", "dop853");
     modulus_ = elliptic::JacobiModulus(std::min(1.0, complement));
     kappa_u3_minus_1_ = kappa_ > 0.0 ? -kappa_ * one_minus_u3_ : mu2_;
     kappa_u3_plus_1_ = mu2_ + kappa_ * one_plus_u1_;
@@ -705,9 +704,9 @@ class ExactSolution {
       } else if (f1 == 0.0 && -f2 / kappa >= 0.0) {
         v1_ = v2_ = 0.0, v3_ = -f2 / kappa;
       } else {
-        throw InvalidParameter("integrator", "exact: the start is a turning point of the nutation with no motion "
+        throw MethodRefusal("exact", "the start is a turning point of the nutation with no motion "
                                              "towards either side (f'(u0) = " + exact_detail::format(f1) +
-                                             "); use dop853");
+                                             ")", "dop853");
       }
     } else {
       // f(0) > 0 >= f(u = -1) = -p(-1)^2 brackets u1 (= -1 when p(-1) = 0: the spinless top
@@ -718,17 +717,17 @@ class ExactSolution {
       const double disc = std::sqrt(std::max(0.0, f2 * f2 - 3.0 * kappa * f1));
       const double minimum = f2 < 0.0 ? (disc - f2) / (3.0 * kappa) : -f1 / (f2 + disc);  // cancellation-free
       if (!(minimum > 0.0 && f(minimum) <= 0.0))
-        throw InvalidParameter("integrator", "exact: the turning points of the nutation cannot be separated "
-                                             "(no root of the cubic above the current tilt); use dop853");
+        throw MethodRefusal("exact", "the turning points of the nutation cannot be separated "
+                                             "(no root of the cubic above the current tilt)", "dop853");
       v2_ = bracketed_root(f, df, 0.0, minimum);
       v3_ = polish(-f2 / kappa - v1_ - v2_);  // Vieta: v1 + v2 + v3 = -f2 / kappa
       if (v3_ < v2_) v3_ = v2_;
     }
     if (!(v1_ <= 0.0 && 0.0 <= v2_ && v2_ <= v3_ && std::isfinite(v1_) && std::isfinite(v2_)))
-      throw InvalidParameter("integrator", "exact: the turning points of the nutation cannot be separated "
+      throw MethodRefusal("exact", "the turning points of the nutation cannot be separated "
                                            "(u - u0 roots " + exact_detail::format(v1_) + ", " +
                                            exact_detail::format(v2_) + ", " + exact_detail::format(v3_) +
-                                           "); use dop853");
+                                           ")", "dop853");
   }
 
   /// What depends on the phase w only through u: sn, cn, dn, 1 -+ u, sqrt(D).
@@ -834,9 +833,9 @@ class ExactSolution {
   }
 
   [[noreturn]] void refuse_series() const {
-    throw InvalidParameter("integrator", "exact: the series in the nutation phase need more than " +
+    throw MethodRefusal("exact", "the series in the nutation phase need more than " +
                                              std::to_string(exact_detail::kMaxSamples) + " samples (k' = " +
-                                             exact_detail::format(modulus_.complement()) + "); use dop853");
+                                             exact_detail::format(modulus_.complement()) + ")", "dop853");
   }
 
   /// t, a_r, b_r at phase w (secular term plus sine series on the reduced phase).

@@ -1,9 +1,10 @@
 // RADAU5: the 3-stage Radau IIA method of order 5 (fully implicit, L-stable, stiffly accurate
 // collocation) with Hairer's embedded error estimate, step-size control and continuous output
 // (Hairer & Wanner, Solving ODEs II, 2nd ed. 1996, sec. IV.5 Table 5.6 and sec. IV.8; the
-// Fortran code radau5.f, whose structure SciPy's integrate/_ivp/radau.py follows). It is a
-// Method of AdaptiveDriver (drivers.hpp): restart / attempt / prepare_dense / complete_dense /
-// dense; a Newton failure reports a non-finite error, and the driver shrinks the step.
+// Fortran code radau5.f, whose structure SciPy's integrate/_ivp/radau.py follows). It is an
+// embedded method of the EmbeddedStepper (integration/steppers.hpp): restart / attempt /
+// prepare_dense / complete_dense / dense; a Newton failure reports a non-finite error, and the
+// controller shrinks the step.
 //
 // Stage equations Z = h (A x I) F(Z), F(Z)_i = f(y0 + Z_i), y1 = y0 + Z_3, solved by simplified
 // Newton in the eigenbasis of A^-1 (W = (T^-1 x I) Z): one real n x n system with
@@ -30,8 +31,9 @@
 //     not by the collocation cubic (radau5.f's CONTR5): the cubic's error is O(h^4), against
 //     the steps' O(h^6), and it interpolates q, omega and v_G separately, so v_P between the
 //     stages leaves the slow manifold, R off by 3e-7 m g at k = 1e5 (test_radau).
-//  4. The driver's PI controller (drivers.hpp) replaces Gustafsson's predictive one: it rejects
-//     few steps here (test_radau), and the driver stays common to all methods.
+//  4. The PI controller (integration/controllers.hpp, through Radau5ToleranceMap below) replaces
+//     Gustafsson's predictive one: it rejects few steps here (test_radau), and the controller
+//     stays common to the adaptive methods.
 #pragma once
 
 #include <Eigen/Core>
@@ -41,6 +43,7 @@
 #include <complex>
 #include <limits>
 
+#include "spinning_top/integration/controllers.hpp"
 #include "spinning_top/integrators/jacobian.hpp"
 
 namespace spinning_top {
@@ -56,6 +59,21 @@ struct RadauStatistics {
   long per_stage_attempts = 0; ///< attempts solved by the per-stage Newton
 };
 
+/// radau5.f's tolerance map (rtol' = 0.1 rtol^(2/3)): the controller's error norm is
+/// (|err| / rtol')^(3/2) / rtol, i.e. the vector err scaled by (|err| / 0.1)^(1/2) / 0.1, with
+/// |err| the RMS over 1 + max(|y0|, |y1|), the controller's own scale, so the map needs no
+/// tolerance. err is O(h^4) (an embedded order-3 solution, sec. IV.8): the mapped norm is O(h^6),
+/// and the controller's exponent 1/6 on it is radau5.f's 1/4 on err.
+struct Radau5ToleranceMap {
+  template <class State>
+  static State map(const State& err, const State& y0, const State& y1) {
+    const State scale = (1.0 + y0.cwiseAbs().cwiseMax(y1.cwiseAbs()).array()).matrix();
+    const double norm = std::sqrt(err.cwiseQuotient(scale).squaredNorm() / static_cast<double>(err.size()));
+    return err * (std::sqrt(norm / 0.1) / 0.1);
+  }
+};
+using Radau5Controller = PiController<6, Radau5ToleranceMap>;
+
 template <class Model>
 class RadauIIA5 {
  public:
@@ -63,13 +81,8 @@ class RadauIIA5 {
   static constexpr int kN = Model::kStateSize;
   static constexpr int kStages = 3;
   static constexpr int kOrder = 5;
-  // The estimate err is O(h^4) (an embedded order-3 solution, sec. IV.8). attempt() reports it
-  // through radau5.f's tolerance map (estimate_error()), as a vector whose norm scales as
-  // err^(3/2), i.e. as h^6: the driver's exponent 1 / (kEmbeddedOrder + 1) = 1/6 is radau5.f's
-  // 1/4 on err.
-  static constexpr int kEmbeddedOrder = 5;
-  static constexpr bool kLazyDense = true;  // dense() needs complete_dense() first
   static constexpr const char* kName = "radau5";
+  using Controller = Radau5Controller;  // the PI control of radau5.f's mapped estimate
 
   using Jacobian = Eigen::Matrix<double, kN, kN>;
   using Stages = Eigen::Matrix<double, kN, kStages>;  // Z_1, Z_2, Z_3 as columns
@@ -77,7 +90,7 @@ class RadauIIA5 {
   struct Attempt {
     State y1;     // y0 + Z_3 (stiffly accurate)
     State f1;     // f(y1)
-    State error;  // a vector whose RMS norm over tolerance (1 + |y|) is radau5.f's err (estimate_error())
+    State error;  // radau5.f's err, O(h^4) (estimate_error()); Radau5ToleranceMap puts it on the controller's scale
   };
 
   struct DenseStep {
@@ -530,28 +543,22 @@ class RadauIIA5 {
   /// stiff components do not count (sec. IV.8, eq. 8.20). At the first step and after a
   /// rejection the filter is applied once more, to f(y0 + err) (eq. 8.21), and the smaller of the
   /// two is used: radau5.f takes the second only when the first fails, which is the same test.
-  /// The result is mapped to the user's tolerance as radau5.f does (rtol' = 0.1 rtol^(2/3)):
-  /// |error| / tol = (|err| / rtol')^(3/2) with RMS norms over 1 + max(|y0|, |y1|), the
-  /// driver's own scale, so the map needs no tolerance.
+  /// Radau5ToleranceMap maps the result to the user's tolerance.
   void estimate_error(const Model& model, const State& y0, const State& f0, const State& y1, double dt,
                       const Stages& z, bool improve, State& error) const {
     const State combination = (z * kErrorWeights) / dt;
     State err = lu_.real.solve(f0 + combination);
-    const State scale = (1.0 + y0.cwiseAbs().cwiseMax(y1.cwiseAbs()).array()).matrix();
-    const double n = static_cast<double>(kN);
-    double norm = std::sqrt(err.cwiseQuotient(scale).squaredNorm() / n);
     if (improve) {
+      const State scale = (1.0 + y0.cwiseAbs().cwiseMax(y1.cwiseAbs()).array()).matrix();
+      const double n = static_cast<double>(kN);
+      const double norm = std::sqrt(err.cwiseQuotient(scale).squaredNorm() / n);
       State f_err;
       model.derivative(State(y0 + err), f_err);
       const State second = lu_.real.solve(f_err + combination);
       const double second_norm = std::sqrt(second.cwiseQuotient(scale).squaredNorm() / n);
-      if (second_norm < norm || !std::isfinite(norm)) {
-        err = second;
-        norm = second_norm;
-      }
+      if (second_norm < norm || !std::isfinite(norm)) err = second;
     }
-    // |err| -> |err|^(3/2) / 0.1^(3/2): the vector err scaled by (|err| / 0.1)^(1/2) / 0.1.
-    error = err * (std::sqrt(norm / 0.1) / 0.1);
+    error = err;
   }
 
   // Radau IIA, s = 3: nodes, error weights and the eigen-decomposition A^-1 = T diag(gamma,
@@ -606,5 +613,6 @@ class RadauIIA5 {
   bool returned_to_simplified_ = false;
   RadauStatistics statistics_;
 };
+
 
 }  // namespace spinning_top

@@ -1,7 +1,8 @@
 // The integrator registry's rows: one specialisation of Integrator<type> per integrator, the one
 // place that gives its name, the scenes it serves, its step limit, its help line and the driver
-// that runs it. Its kind (fixed step, adaptive, closed form) is read off the driver, so changing
-// a driver (e.g. radau5 from FixedStepDriver to AdaptiveDriver) changes how the core builds it,
+// that runs it: the one driver loop (integration/driver.hpp) over the method's stepper and its
+// controller. Its kind (fixed step, adaptive, closed form) is the controller's, so changing a
+// controller (e.g. radau5 from SubstepPlan to its PI control) changes how the core builds it,
 // validates its step and documents it, in one line.
 // Read by src/integrator_registry.cpp (the run-time view, integrator_registry.hpp) and by the
 // scene factories (src/scenes/*_simulator.cpp), which instantiate the drivers of their scene.
@@ -9,11 +10,11 @@
 
 #include <type_traits>
 
-#include "spinning_top/drivers.hpp"
+#include "spinning_top/integration/driver.hpp"
 #include "spinning_top/integrator_registry.hpp"
 #include "spinning_top/integrators/dop853.hpp"
 #include "spinning_top/integrators/dormand_prince.hpp"
-#include "spinning_top/integrators/exact_driver.hpp"
+#include "spinning_top/integrators/exact_stepper.hpp"
 #include "spinning_top/integrators/gauss.hpp"
 #include "spinning_top/integrators/radau.hpp"
 #include "spinning_top/integrators/rk4.hpp"
@@ -40,6 +41,13 @@ constexpr unsigned kIntegrableScenes = scene_bit(SceneType::kFixedTip) | scene_b
 
 template <class Model>
 class AutoDriver;  // auto_driver.hpp: runs other rows' drivers
+
+/// A one-step method at equal substeps of at most `step` per request.
+template <class Model, class Method>
+using FixedStepDriver = Driver<Model, OneStepStepper<Model, Method>, SubstepPlan>;
+/// An embedded pair with dense output under the controller its error estimate calls for.
+template <class Model, class Method>
+using AdaptiveDriver = Driver<Model, EmbeddedStepper<Model, Method>, typename Method::Controller>;
 
 /// One row per IntegratorType: kName, kScenes, kStepLimit, kHelp, kSceneNote and Driver<Model>.
 template <IntegratorType type>
@@ -147,7 +155,7 @@ struct Integrator<IntegratorType::kRadau5> {
       "Radau IIA order 5 with Hairer's RADAU5 error estimate and step control, L-stable: stiff friction";
   static constexpr const char* kSceneNote = "";
   template <class Model>
-  using Driver = AdaptiveDriver<Model, RadauIIA5<Model>>;
+  using Driver = AdaptiveDriver<Model, RadauIIA5<Model>>;  // its controller: radau.hpp's Radau5Controller
 };
 
 template <>
@@ -165,7 +173,7 @@ struct Integrator<IntegratorType::kRodas4> {
 
 template <>
 struct Integrator<IntegratorType::kExact> {
-  static constexpr const char* kName = ExactDriver<FixedTip>::kName;
+  static constexpr const char* kName = ExactStepper<FixedTip>::kName;
   static constexpr unsigned kScenes = kIntegrableScenes;  // as ExactSolution's static_assert
   static constexpr StepLimit kStepLimit = StepLimit::kNone;
   static constexpr const char* kHelp =
@@ -186,41 +194,16 @@ constexpr bool serves() {
   return (Integrator<type>::kScenes & scene_bit(SceneOf<Model>::value)) != 0;
 }
 
-namespace registry_detail {
-template <class Driver>
-struct is_auto_driver : std::false_type {};
-template <class Model>
-struct is_auto_driver<AutoDriver<Model>> : std::true_type {};
-template <class Driver, class = void>
-struct is_closed_form : std::false_type {};
-template <class Driver>
-struct is_closed_form<Driver, std::void_t<decltype(Driver::kClosedForm)>> : std::bool_constant<Driver::kClosedForm> {};
-}  // namespace registry_detail
-
-/// The kind of a driver: automatic (AutoDriver), closed form (ExactDriver), adaptive or fixed step.
-template <class Driver>
-constexpr IntegratorKind kind_of_driver() {
-  if constexpr (registry_detail::is_auto_driver<Driver>::value) {
-    return IntegratorKind::kAutomatic;
-  } else if constexpr (registry_detail::is_closed_form<Driver>::value) {
-    return IntegratorKind::kClosedForm;
-  } else if constexpr (Driver::kAdaptive) {
-    return IntegratorKind::kAdaptive;
-  } else {
-    return IntegratorKind::kFixedStep;
-  }
-}
-
-/// The kind of a row, read off its driver for the first scene it serves.
+/// The kind of a row: its driver's (Driver::kKind, its controller's), for the first scene it serves.
 template <IntegratorType type>
 constexpr IntegratorKind kind_of() {
   constexpr unsigned scenes = Integrator<type>::kScenes;
   if constexpr ((scenes & scene_bit(SceneType::kFixedTip)) != 0)
-    return kind_of_driver<DriverFor<FixedTip, type>>();
+    return DriverFor<FixedTip, type>::kKind;
   else if constexpr ((scenes & scene_bit(SceneType::kFrictionless)) != 0)
-    return kind_of_driver<DriverFor<Frictionless, type>>();
+    return DriverFor<Frictionless, type>::kKind;
   else
-    return kind_of_driver<DriverFor<Viscous, type>>();
+    return DriverFor<Viscous, type>::kKind;
 }
 
 }  // namespace spinning_top

@@ -136,7 +136,7 @@ class FixedTip {
     return 0.5 * parameters_.inertia_about_tip() * (wx * wx + wy * wy) +
            parameters_.mass * parameters_.gravity * parameters_.tip_distance * vertical_in_body(y).z();
   }
-  /// What the energy balance watches (EventMonitor): E - C wZ^2 / 2, conserved.
+  /// What the energy balance watches (StepGuard): E - C wZ^2 / 2, conserved.
   double energy_balance(const State& y) const { return energy_without_spin(y); }
 
   const TopParameters& parameters() const { return parameters_; }

@@ -83,7 +83,7 @@ class Frictionless {
     return 0.5 * m * vz * vz + 0.5 * parameters_.inertia_transverse * (wx * wx + wy * wy) +
            m * parameters_.gravity * h * gamma.z();
   }
-  /// What the energy balance watches (EventMonitor): E - C wZ^2 / 2, conserved.
+  /// What the energy balance watches (StepGuard): E - C wZ^2 / 2, conserved.
   double energy_balance(const State& y) const { return energy_without_spin(y); }
 
   const TopParameters& parameters() const { return parameters_; }

@@ -80,7 +80,7 @@ class Viscous {
     return 0.5 * m * velocity.squaredNorm() + 0.5 * parameters_.inertia_transverse * (wx * wx + wy * wy) +
            m * parameters_.gravity * h * gamma.z();
   }
-  /// What the energy balance watches (EventMonitor): E - C wZ^2 / 2 + W, conserved (W' = k |v_P|^2).
+  /// What the energy balance watches (StepGuard): E - C wZ^2 / 2 + W, conserved (W' = k |v_P|^2).
   double energy_balance(const State& y) const { return energy_without_spin(y) + y[kWork]; }
 
   const TopParameters& parameters() const { return parameters_; }
