@@ -104,8 +104,8 @@ class ExactSolution {
     return std::holds_alternative<exact_detail::FreeRotation>(solution_) ? Kind::kFreeRotation : Kind::kSleeping;
   }
 
-  // The quadrature's own quantities; the other kinds answer as if it had no motion (0, the
-  // vertical u = 1, period factors 1).
+  // The quadrature's own quantities. The other kinds have none and answer 0 (turning points:
+  // u = 1; period factors: 1), as the one class of all three did.
   /// Nutation period T [s] of the quadrature (0 otherwise), turning points u1 <= u2.
   double nutation_period() const { return quadrature() ? quadrature()->period() : 0.0; }
   double turning_point_low() const { return quadrature() ? quadrature()->turning_point_low() : 1.0; }
