@@ -26,8 +26,8 @@ class AutoDriver {
   template <IntegratorType type>
   struct Candidate {
     static constexpr IntegratorType kType = type;
-    using Driver = DriverFor<Model, type>;
-    Driver driver;
+    explicit Candidate(const IntegratorSettings& settings) : driver(settings) {}
+    DriverFor<Model, type> driver;
   };
   /// std::variant of the Candidates of kAutoCandidates that serve the scene.
   template <std::size_t... i>
@@ -97,7 +97,7 @@ class AutoDriver {
   static Candidates make(const IntegratorSettings& settings) {
     if constexpr (index < std::variant_size_v<Candidates>) {
       using C = std::variant_alternative_t<index, Candidates>;
-      if (settings.type == C::kType) return Candidates(std::in_place_index<index>, C{typename C::Driver(settings)});
+      if (settings.type == C::kType) return Candidates(std::in_place_index<index>, settings);
       return make<index + 1>(settings);
     } else {
       throw std::logic_error(std::string("auto: planned ") + to_string(settings.type) + ", which is not among "

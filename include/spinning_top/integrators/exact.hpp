@@ -2,48 +2,23 @@
 // Lagrange top, frictionless top), evaluated at any requested time from constants of motion
 // computed once per (re)start. No time step.
 //
-// 1. The nutation. With u = cos(theta) = e_Zz, energy and the two conserved momenta give
-// (PHYSICS.md, "Invariants"; Goldstein, Classical Mechanics, 3rd ed., sec. 5.7)
-//   udot^2 D(u) = f(u) = (2/A')(E' - m g h u)(1 - u^2) - p(u)^2,   p(u) = (L_z - C wZ u) / A',
-// A' = A0, D = 1 (fixed tip); A' = A, D = 1 + (m h^2/A)(1 - u^2) (frictionless); f is the cubic
-// kappa (u - u1)(u2 - u)(u3 - u), kappa = 2 m g h / A', u1 <= u <= u2 <= 1 <= u3. Jacobi's
-// substitution u = u1 + (u2 - u1) sn^2(w, k), k^2 = (u2 - u1)/(u3 - u1), turns it into
-//   dt/dw = 2 sqrt(D(u)) / mu,   mu^2 = kappa (u3 - u1)
-// (Whittaker, Analytical Dynamics, sec. 72; constant for the fixed tip, so there t is linear in w).
-// w is the uniformizing variable of the motion: every quantity below is analytic in a strip of
-// half-width K' about the real w axis whatever the state, in particular near the separatrix
-// (k -> 1: a slow top released near the vertical, an unstable sleeping top), where the
-// trigonometric parameter u = u2 - (u2 - u1) sin^2(s) of the earlier version had a branch point
-// at distance sqrt((u3 - u2)/(u2 - u1)) from the real s axis.
+// One closed form per kind of motion, each in a header of its own under exact/, with the
+// numerics they share beside them:
+//   quadrature.hpp     the Lagrange top and the frictionless top in general: the nutation by
+//                      Jacobi's elliptic functions, the attitude by Fourier series in its phase,
+//                      the events in closed form (items 1, 2 and 4 there);
+//   free_rotation.hpp  torque-free tops with a fixed G (m g h = 0 and alpha_D = 0: the free
+//                      symmetric top);
+//   sleeping.hpp       the sleeping top (axis vertical, omega_perp = 0: an equilibrium);
+//   series.hpp         Fourier sums by Clenshaw's recurrence, their coefficients by DCT-I / FFT;
+//   polynomial.hpp     low-degree polynomials, their sign changes, a safeguarded Newton root finder;
+//   common.hpp         the motion, the extremes and the start the closed forms share.
+// ExactSolution below is what the driver (exact_driver.hpp) sees: it chooses the kind from the
+// start and passes each query to it.
 //
-// 2. The attitude, without Euler angles. Write q = (w, x, y, z) as the Cayley-Klein pair
-// alpha = w + i z, beta = x + i y (|alpha|^2 = (1 + u)/2, |beta|^2 = (1 - u)/2). The kinematics
-// qdot = q (0, omega)/2 read (Omega = omega_X + i omega_Y)
-//   alphadot = (i wZ alpha - beta conj(Omega))/2,   betadot = (alpha Omega - i wZ beta)/2,
-// and with the z-x-z angles alpha = cos(theta/2) e^{i a}, beta = sin(theta/2) e^{i b},
-// a = (phi + psi)/2, b = (phi - psi)/2:
-//   adot = (wZ + p/(1 + u))/2,   bdot = (p/(1 - u) - wZ)/2.
-// bdot has a pole where u = 1 (a zero of 1 - u(w) at complex w, near the real axis when the axis
-// passes near the vertical): that is the Euler-angle singularity, and why the Fourier series
-// of phi and psi need arbitrarily many terms there. It is removed in closed form: on the real
-// axis 1 - u = (1 - u1) cn^2 + (1 - u2) sn^2 = |F(w)|^2 with the entire function
-//   F(w) = sqrt(1 - u1) cn(w) + i s+ sqrt(1 - u2) sn(w),   s+ = sign(p(1)),
-// whose phase has exactly the pole part of b (its residue is that of b, i/2, at the zero of
-// F; matching it fixes s+), so that
-//   beta = e^{i b_r(w)} F(w) / sqrt(2),   db_r/dw = db/dw - d arg F/dw = analytic,
-// and the same at u = -1 with G(w) = sqrt(1 + u1) cn + i s- sqrt(1 + u2) sn for alpha. The
-// analytic remainders, written without cancellation (p(u) - p(1) = c (1 - u), D - 1 = alpha_D
-// (1 - u^2), dn = sqrt((u3 - u)/(u3 - u1))):
-//   db_r/dw = [p alpha_D (1 + u)/(sqrt D + 1) + c]/mu - s+ sqrt((1-u1)(1-u2)) kappa /
-//             (mu (sqrt(kappa (u3 - 1)) + mu dn)) - wZ sqrt(D)/mu,
-//   da_r/dw = [p alpha_D (1 - u)/(sqrt D + 1) - c]/mu + s- sqrt((1+u1)(1+u2)) kappa /
-//             (mu (sqrt(kappa (u3 + 1)) + mu dn)) + wZ sqrt(D)/mu,           c = C wZ / A'.
-// They depend on w only through u, so t(w), a_r(w), b_r(w) are a secular term plus a sine series
-// in x = pi w / K (K = K(k)), whose coefficients come from a DCT-I of samples on [0, K],
-// doubled until the upper half of the coefficients is at round-off. No state is refused for
-// passing near or through the vertical, and none for starting there while moving.
-// The body rates follow from the kinematics: Omega = (2 betadot + i wZ beta) / alpha (or, where
-// |alpha| < |beta|, from alphadot), with betadot = e^{i b_r} (i b_r' F + F') wdot / sqrt(2).
+// 1. The nutation: exact/quadrature.hpp, item 1.
+//
+// 2. The attitude, without Euler angles: exact/quadrature.hpp, item 2.
 //
 // 3. Serving requests. Over one nutation period T = 2K t'(mean) the pair (alpha, beta) turns by
 // fixed phases: alpha(t + T) = -e^{i 2K a_r'(mean)} alpha(t), beta likewise, Omega by their
@@ -52,218 +27,32 @@
 // series and, once per period, the period's two phase factors. If the top leaves the model's
 // validity (below), the interpolated span ends at that event instead.
 //
-// 4. Events in closed form. R and e_Zz are functions of u alone: z_G = h u, so R = m (g + h
-// udd) with udd = (f' D - f D')/(2 D^2) (fixed tip: f'/2): the sign of R is that of the quartic
-// (fixed tip: quadratic) P(u) = 2 g D^2 + h (f' D - f D'). Its roots in [u1, u2] (by isolating
-// intervals from the roots of its derivatives) and u = 0 give the phases w where the motion
-// enters R < 0 or e_Zz <= 0; the first one after the start, converted by t(w), is the event.
-// Nothing is sampled, so no dip of R, however short, is missed.
+// 4. Events in closed form: exact/quadrature.hpp, item 4; the free rotation's in
+// exact/free_rotation.hpp.
 //
-// Handled in closed form as well: torque-free tops with a fixed G (m g h = 0 and alpha_D = 0:
-// the free symmetric top) and the sleeping top (axis vertical, omega_perp = 0: an equilibrium).
-// Steady precession (u1 = u2) needs no special case (k = 0). The frictionless top without
-// gravity (kappa = 0, f quadratic: u3 -> infinity) is the limit k -> 0 with mu^2 = -f''/2.
-// Refused with InvalidParameter("integrator", why), so that auto falls back to a time-stepper:
+// Refused with MethodRefusal("exact", why, "dop853") (method_refusal.hpp), so that auto falls back to a time-stepper:
 // the viscous scene (not integrable), a motion exactly on the separatrix (k = 1: it approaches
 // the unstable vertical for ever, the period is infinite) and series that do not converge within
-// kMaxSamples samples.
+// Quadrature::kMaxSamples samples.
 #pragma once
 
 #include <Eigen/Core>
-#include <algorithm>
-#include <array>
-#include <cmath>
-#include <complex>
-#include <cstdio>
-#include <limits>
-#include <optional>
-#include <string>
 #include <type_traits>
-#include <vector>
+#include <variant>
 
 #include "spinning_top/events.hpp"
-#include "spinning_top/integrators/chebyshev.hpp"
-#include "spinning_top/integrators/elliptic.hpp"
+#include "spinning_top/integrators/exact/common.hpp"
+#include "spinning_top/integrators/exact/free_rotation.hpp"
+#include "spinning_top/integrators/exact/quadrature.hpp"
+#include "spinning_top/integrators/exact/sleeping.hpp"
 #include "spinning_top/kinematics.hpp"
-#include "spinning_top/method_refusal.hpp"
 #include "spinning_top/parameters.hpp"
 #include "spinning_top/scenes/fixed_tip.hpp"
 #include "spinning_top/scenes/frictionless.hpp"
 
 namespace spinning_top {
 
-namespace exact_detail {
-
-using Complex = std::complex<double>;
-constexpr double kPi = 3.14159265358979323846;
-constexpr double kEpsilon = std::numeric_limits<double>::epsilon();
-/// Largest number of samples per half period of the series (beyond: refused).
-constexpr int kMaxSamples = 1 << 14;
-
-/// N series sharing the argument x: sum_k c[k][i] sin((k+1) x), by Clenshaw's recurrence
-/// b_k = c_k + 2 cos(x) b_{k+1} - b_{k+2}, sum = b_1 sin(x).
-template <std::size_t N>
-std::array<double, N> sine_sums(const std::vector<std::array<double, N>>& c, double cos_x, double sin_x) {
-  std::array<double, N> b1{}, b2{};
-  const double two_cos = 2.0 * cos_x;
-  for (std::size_t k = c.size(); k-- > 0;) {
-    for (std::size_t i = 0; i < N; ++i) {
-      const double b0 = c[k][i] + two_cos * b1[i] - b2[i];
-      b2[i] = b1[i];
-      b1[i] = b0;
-    }
-  }
-  for (std::size_t i = 0; i < N; ++i) b1[i] *= sin_x;
-  return b1;
-}
-
-/// sum_k c[k] cos((k+1) x) by Clenshaw: b_1 cos(x) - b_2.
-inline double cosine_sum(const std::vector<double>& c, double cos_x) {
-  double b1 = 0.0, b2 = 0.0;
-  const double two_cos = 2.0 * cos_x;
-  for (std::size_t k = c.size(); k-- > 0;) {
-    const double b0 = c[k] + two_cos * b1 - b2;
-    b2 = b1;
-    b1 = b0;
-  }
-  return b1 * cos_x - b2;
-}
-
-/// In-place radix-2 complex FFT (Cooley-Tukey, decimation in time) of (re, im), n a power of
-/// two; the arithmetic written out (std::complex's operator* checks for infinities).
-inline void fft(std::vector<double>& re, std::vector<double>& im) {
-  const std::size_t n = re.size();
-  for (std::size_t i = 1, j = 0; i < n; ++i) {
-    std::size_t bit = n >> 1;
-    for (; j & bit; bit >>= 1) j ^= bit;
-    j ^= bit;
-    if (i < j) std::swap(re[i], re[j]), std::swap(im[i], im[j]);
-  }
-  // e^{-2 pi i k / n}, each from its own cos and sin, kept for the next transform of this size
-  // (the series double their size until converged, and every start repeats the sizes).
-  static thread_local std::vector<double> cosine, sine;
-  if (cosine.size() != n / 2) {
-    cosine.resize(n / 2);
-    sine.resize(n / 2);
-    for (std::size_t k = 0; k < n / 2; ++k) {
-      cosine[k] = std::cos(2.0 * kPi * k / n);
-      sine[k] = -std::sin(2.0 * kPi * k / n);
-    }
-  }
-  for (std::size_t length = 2; length <= n; length <<= 1) {
-    const std::size_t half = length / 2, stride = n / length;
-    for (std::size_t start = 0; start < n; start += length) {
-      for (std::size_t k = 0; k < half; ++k) {
-        const double wr = cosine[k * stride], wi = sine[k * stride];
-        const std::size_t a = start + k, b = a + half;
-        const double odd_re = re[b] * wr - im[b] * wi, odd_im = re[b] * wi + im[b] * wr;
-        re[b] = re[a] - odd_re, im[b] = im[a] - odd_im;
-        re[a] += odd_re, im[a] += odd_im;
-      }
-    }
-  }
-}
-
-/// Cosine coefficients a_k, k = 0..n, of two even 2n-periodic functions given by their n + 1
-/// samples s_j = g(pi j / n) (the trapezoidal rule, i.e. a DCT-I), through one FFT of the even
-/// extensions packed as real and imaginary parts (each has a real spectrum):
-/// g(x) = a_0 + sum_{k>=1} a_k cos(k x) to the aliasing error.
-inline std::array<std::vector<double>, 2> cosine_coefficients(const std::vector<double>& first,
-                                                              const std::vector<double>& second) {
-  const std::size_t n = first.size() - 1;
-  std::vector<double> re(2 * n), im(2 * n);
-  for (std::size_t j = 0; j <= n; ++j) re[j] = first[j], im[j] = second[j];
-  for (std::size_t j = 1; j < n; ++j) re[2 * n - j] = first[j], im[2 * n - j] = second[j];
-  fft(re, im);
-  std::array<std::vector<double>, 2> a = {std::vector<double>(n + 1), std::vector<double>(n + 1)};
-  for (std::size_t k = 0; k <= n; ++k) a[0][k] = re[k] / static_cast<double>(n), a[1][k] = im[k] / static_cast<double>(n);
-  for (auto& c : a) c[0] *= 0.5, c[n] *= 0.5;
-  return a;
-}
-
-/// Root of f in [lo, hi], where f(lo) and f(hi) differ in sign: Newton's method safeguarded by
-/// bisection (Numerical Recipes' rtsafe), to round-off.
-template <class F, class DF>
-double bracketed_root(const F& f, const DF& df, double lo, double hi) {
-  double f_lo = f(lo);
-  if (f_lo == 0.0) return lo;
-  if (f(hi) == 0.0) return hi;
-  double x = 0.5 * (lo + hi);
-  for (int iteration = 0; iteration < 200; ++iteration) {
-    const double fx = f(x);
-    if (fx == 0.0) return x;
-    if ((fx < 0.0) == (f_lo < 0.0)) {
-      lo = x;
-      f_lo = fx;
-    } else {
-      hi = x;
-    }
-    const double slope = df(x);
-    double next = slope != 0.0 ? x - fx / slope : 0.5 * (lo + hi);
-    if (!(next > lo && next < hi)) next = 0.5 * (lo + hi);
-    const bool done = std::abs(next - x) <= 2.0 * kEpsilon * std::abs(x) || hi - lo <= 2.0 * kEpsilon * std::abs(x);
-    x = next;
-    if (done) break;
-  }
-  return x;
-}
-
-/// A real polynomial c[0] + c[1] v + ... (low degree).
-using Polynomial = std::vector<double>;
-
-inline double evaluate(const Polynomial& p, double v) {
-  double sum = 0.0;
-  for (std::size_t i = p.size(); i-- > 0;) sum = sum * v + p[i];
-  return sum;
-}
-inline Polynomial derivative(const Polynomial& p) {
-  Polynomial d;
-  for (std::size_t i = 1; i < p.size(); ++i) d.push_back(static_cast<double>(i) * p[i]);
-  return d;
-}
-inline Polynomial multiply(const Polynomial& a, const Polynomial& b) {
-  if (a.empty() || b.empty()) return {};
-  Polynomial c(a.size() + b.size() - 1, 0.0);
-  for (std::size_t i = 0; i < a.size(); ++i)
-    for (std::size_t j = 0; j < b.size(); ++j) c[i + j] += a[i] * b[j];
-  return c;
-}
-inline Polynomial subtract(Polynomial a, const Polynomial& b) {
-  a.resize(std::max(a.size(), b.size()), 0.0);
-  for (std::size_t i = 0; i < b.size(); ++i) a[i] -= b[i];
-  return a;
-}
-
-/// The points of (lo, hi) where p changes sign, in increasing order: the critical points of p
-/// (where p' changes sign, recursively) cut [lo, hi] into intervals where p is monotone, and
-/// each interval whose ends differ in sign holds exactly one root (Newton-bisection). A root
-/// where p only touches zero is not a sign change and is not reported.
-inline std::vector<double> sign_changes(Polynomial p, double lo, double hi) {
-  while (!p.empty() && p.back() == 0.0) p.pop_back();
-  std::vector<double> roots;
-  if (p.size() < 2 || !(lo < hi)) return roots;
-  const Polynomial dp = derivative(p);
-  std::vector<double> cuts = {lo};
-  for (double c : sign_changes(dp, lo, hi)) cuts.push_back(c);
-  cuts.push_back(hi);
-  auto f = [&](double v) { return evaluate(p, v); };
-  auto df = [&](double v) { return evaluate(dp, v); };
-  for (std::size_t i = 0; i + 1 < cuts.size(); ++i) {
-    const double fa = f(cuts[i]), fb = f(cuts[i + 1]);
-    if ((fa < 0.0 && fb > 0.0) || (fa > 0.0 && fb < 0.0)) roots.push_back(bracketed_root(f, df, cuts[i], cuts[i + 1]));
-  }
-  return roots;
-}
-
-inline std::string format(double value) {
-  char buffer[32];
-  std::snprintf(buffer, sizeof buffer, "%.3g", value);
-  return buffer;
-}
-
-}  // namespace exact_detail
-
-/// The exact motion from one state (t0, y0). Throws InvalidParameter("integrator", why) for the
+/// The exact motion from one state (t0, y0). Throws MethodRefusal (an InvalidParameter of the key integrator) for the
 /// cases it refuses (header comment).
 template <class Model>
 class ExactSolution {
@@ -273,153 +62,90 @@ class ExactSolution {
   static_assert(std::is_same_v<Model, FixedTip> || std::is_same_v<Model, Frictionless>,
                 "exact: only the integrable scenes (fixed tip, frictionless)");
   enum class Kind { kQuadrature, kFreeRotation, kSleeping };
-
-  /// The attitude as Cayley-Klein pair, q = (Re alpha, Re beta, Im beta, Im alpha), and the
-  /// transverse body rate Omega = omega_X + i omega_Y.
-  struct Motion {
-    Complex alpha, beta, omega;
-  };
+  using Motion = exact_detail::Motion;
+  using Range = exact_detail::Range;
 
   ExactSolution() = default;
 
-  ExactSolution(const Model& model, double t0, const State& y0) : t0_(t0) {
+  ExactSolution(const Model& model, double t0, const State& y0) {
     const TopParameters& p = model.parameters();
     constexpr bool sliding = std::is_same_v<Model, Frictionless>;
     const double h = p.tip_distance;
-    transverse_ = sliding ? p.inertia_transverse : p.inertia_about_tip();  // A'
-    alpha_d_ = sliding ? p.mass * h * h / p.inertia_transverse : 0.0;
-    kappa_ = 2.0 * p.mass * p.gravity * h / transverse_;
-    gravity_ = p.gravity;
-    tip_distance_ = h;
-    spin_ = model.spin();
-    axial_ = p.inertia_axial;
+    exact_detail::Start from;
+    from.t0 = t0;
+    from.transverse = sliding ? p.inertia_transverse : p.inertia_about_tip();  // A'
+    from.alpha_d = sliding ? p.mass * h * h / p.inertia_transverse : 0.0;
+    from.kappa = 2.0 * p.mass * p.gravity * h / from.transverse;
+    from.gravity = p.gravity;
+    from.tip_distance = h;
+    from.spin = model.spin();
+    from.axial = p.inertia_axial;
     State unit = y0;
     normalize_attitude(unit);
-    q0_ = attitude_of(unit);
-    wx0_ = unit[state_index::kOmegaX];
-    wy0_ = unit[state_index::kOmegaY];
+    from.q0 = attitude_of(unit);
+    from.wx0 = unit[state_index::kOmegaX];
+    from.wy0 = unit[state_index::kOmegaY];
     const Vector3 gamma = vertical_in_body(unit);
-    if (kappa_ == 0.0 && alpha_d_ == 0.0) {
-      init_free_rotation();
+    if (from.kappa == 0.0 && from.alpha_d == 0.0) {
+      solution_.template emplace<exact_detail::FreeRotation>(from);
       return;
     }
     const double sin2 = gamma.x() * gamma.x() + gamma.y() * gamma.y();
-    if (sin2 == 0.0 && wx0_ == 0.0 && wy0_ == 0.0) {
-      kind_ = Kind::kSleeping;  // an equilibrium: Gamma = e_Z, no torque, omega_perp stays 0
+    if (sin2 == 0.0 && from.wx0 == 0.0 && from.wy0 == 0.0) {
+      solution_.template emplace<exact_detail::Sleeping>(from);  // an equilibrium
       return;
     }
-    init_quadrature(unit, gamma, sin2);
+    solution_.template emplace<exact_detail::Quadrature>(from, gamma, sin2);
   }
 
-  Kind kind() const { return kind_; }
+  Kind kind() const {
+    if (quadrature()) return Kind::kQuadrature;
+    return std::holds_alternative<exact_detail::FreeRotation>(solution_) ? Kind::kFreeRotation : Kind::kSleeping;
+  }
+
+  // The quadrature's own quantities. The other kinds have none and answer 0 (turning points:
+  // u = 1; period factors: 1), as the one class of all three did.
   /// Nutation period T [s] of the quadrature (0 otherwise), turning points u1 <= u2.
-  double nutation_period() const { return kind_ == Kind::kQuadrature ? period_ : 0.0; }
-  double turning_point_low() const { return u0_ + v1_; }
-  double turning_point_high() const { return u0_ + v2_; }
+  double nutation_period() const { return quadrature() ? quadrature()->period() : 0.0; }
+  double turning_point_low() const { return quadrature() ? quadrature()->turning_point_low() : 1.0; }
+  double turning_point_high() const { return quadrature() ? quadrature()->turning_point_high() : 1.0; }
   /// Fourier terms per series in w (what the start computed; requests do not sum them).
-  int terms() const { return static_cast<int>(std::max(angle_sine_.size(), time_sine_.size())); }
+  int terms() const { return quadrature() ? quadrature()->terms() : 0; }
   /// Samples per half period the series needed (a cost measure).
-  int samples() const { return samples_; }
+  int samples() const { return quadrature() ? quadrature()->samples() : 0; }
+  /// Period factors of the quadrature: alpha(t + T) = alpha_turn * alpha(t), beta likewise.
+  Complex alpha_turn() const { return quadrature() ? quadrature()->alpha_turn() : Complex(1.0, 0.0); }
+  Complex beta_turn() const { return quadrature() ? quadrature()->beta_turn() : Complex(1.0, 0.0); }
+  /// The angle the interpolated functions turn through in one period (Quadrature::phase_per_period).
+  double phase_per_period() const { return quadrature() ? quadrature()->phase_per_period() : 0.0; }
+  /// A bound of |omega| over the motion (the scale of the body rates and of their round-off).
+  double rate_scale() const { return quadrature() ? quadrature()->rate_scale() : 0.0; }
+
   /// The first time after the start at which the motion leaves the model's validity, and
   /// which way (kNone and infinity if it never does).
-  Event first_event() const { return event_; }
-  double first_event_time() const { return event_time_; }
-  double start_time() const { return t0_; }
-  /// Period factors of the quadrature: alpha(t + T) = alpha_turn * alpha(t), beta likewise.
-  Complex alpha_turn() const { return alpha_turn_; }
-  Complex beta_turn() const { return beta_turn_; }
-  /// The angle the interpolated functions (alpha, beta, Omega) turn through in one period: their
-  /// secular phases plus 2 pi per significant harmonic of the nutation (a coefficient above 1e-3
-  /// of the largest). Sets the pieces of the request interpolation.
-  double phase_per_period() const {
-    if (kind_ != Kind::kQuadrature) return 0.0;
-    const double quarter = modulus_.quarter_period();
-    const double a = std::abs(2.0 * quarter * mean_[1]) + exact_detail::kPi;  // G turns by pi per period
-    const double b = std::abs(2.0 * quarter * mean_[2]) + exact_detail::kPi;
-    double largest = 0.0;
-    for (const auto& c : angle_sine_) largest = std::max({largest, std::abs(c[0]), std::abs(c[1])});
-    for (const auto& c : time_sine_) largest = std::max(largest, std::abs(c[0]) / std::max(mean_[0], 1e-300));
-    int harmonics = 1;  // the nutation itself, through u
-    for (std::size_t k = 0; k < std::max(angle_sine_.size(), time_sine_.size()); ++k) {
-      const double size = std::max(k < angle_sine_.size() ? std::max(std::abs(angle_sine_[k][0]), std::abs(angle_sine_[k][1])) : 0.0,
-                                   k < time_sine_.size() ? std::abs(time_sine_[k][0]) / std::max(mean_[0], 1e-300) : 0.0);
-      if (size > 1e-3 * largest) harmonics = static_cast<int>(k) + 1;
-    }
-    return std::max({a, b, a + b}) + 2.0 * exact_detail::kPi * harmonics;
+  Event first_event() const {
+    return std::visit([](const auto& s) { return s.first_event(); }, solution_);
   }
-  /// A bound of |omega| over the motion (the scale of the body rates and of their round-off).
-  double rate_scale() const { return rate_scale_; }
+  double first_event_time() const {
+    return std::visit([](const auto& s) { return s.first_event_time(); }, solution_);
+  }
+  double start_time() const {
+    return std::visit([](const auto& s) { return s.start_time(); }, solution_);
+  }
 
   /// The motion at time t, from the closed form.
   Motion motion(double t) const {
-    const double dt = t - t0_;
-    if (kind_ == Kind::kSleeping) {
-      const double half = 0.5 * spin_ * dt;
-      const Complex turn(std::cos(half), std::sin(half));
-      return {Complex(q0_.w(), q0_.z()) * turn, Complex(q0_.x(), q0_.y()) * std::conj(turn), Complex(0.0, 0.0)};
-    }
-    if (kind_ == Kind::kFreeRotation) return free_rotation(dt);
-    return motion_at_phase(phase_of_time(t));
+    return std::visit([t](const auto& s) { return s.motion(t); }, solution_);
   }
 
   /// The state at time t.
   State at(double t) const { return state_of(motion(t)); }
 
   /// The extremes of the motion over [t0, t] (t >= t0): the largest 1 - u (u = e_Zz = cos tilt),
-  /// and the least R / m. Both depend on the state through u alone (z_G = h u, R = m (g + z_G''),
-  /// header comment, item 4), so over [t0, t] they are extremes of functions of u over the range
-  /// u covers: [u1, u2] once the phase w has passed a turning point of each kind (u = u1 at
-  /// w = 0 mod 2K, u2 at w = K mod 2K), else the values between the ends. R / m = P(v) / (2 D^2),
-  /// least at an end of that range or where d(P / D^2)/dv = (P' D - 2 P D') / D^3 changes sign.
-  /// Nothing is sampled: no peak between two samples is missed.
-  struct Range {
-    double one_minus_u_max = 0.0;            ///< 1 - cos(largest tilt)
-    double least_normal_force_per_mass = 0.0;  ///< [m/s^2]
-  };
+  /// and the least R / m (each kind's range_until says how).
   Range range_until(double t) const {
-    using namespace exact_detail;
-    Range range;
-    if (kind_ == Kind::kSleeping) {  // the axis stays vertical, nothing accelerates: R = m g
-      range.least_normal_force_per_mass = gravity_;
-      return range;
-    }
-    if (kind_ == Kind::kFreeRotation) {
-      // e_Zz = a + rho cos(phi), R / m = g - h w^2 rho cos(phi), phi = w (t - t0) - delta.
-      const double phi0 = -free_delta_, phi1 = free_rate_ * (t - t0_) - free_delta_;
-      const double two_pi = 2.0 * kPi;
-      auto passes = [&](double phase) {  // phi0 <= phase + 2 pi n <= phi1 for some n
-        return std::floor((phi1 - phase) / two_pi) >= std::ceil((phi0 - phase) / two_pi);
-      };
-      const double cos_max = passes(0.0) ? 1.0 : std::max(std::cos(phi0), std::cos(phi1));
-      const double cos_min = passes(kPi) ? -1.0 : std::min(std::cos(phi0), std::cos(phi1));
-      range.one_minus_u_max = free_rho_ == 0.0 ? free_one_minus_a_ : free_one_minus_a_ - free_rho_ * cos_min;
-      range.least_normal_force_per_mass = gravity_ - tip_distance_ * free_rate_ * free_rate_ * free_rho_ * cos_max;
-      return range;
-    }
-    const double quarter = modulus_.quarter_period(), period_w = 2.0 * quarter;
-    const double w1 = std::max(w0_, phase_of_time(t));
-    auto passes = [&](double phase) {  // w0 <= phase + 2K n <= w1 for some n
-      return std::floor((w1 - phase) / period_w) >= std::ceil((w0_ - phase) / period_w);
-    };
-    const bool low = delta_ > 0.0 && passes(0.0), high = delta_ > 0.0 && passes(quarter);
-    // u and 1 - u at the end (1 - u from the Jacobi functions, without cancellation).
-    const double turns = std::floor(w1 / period_w);
-    const Phase end = phase_values(modulus_.at(std::fma(-turns, period_w, w1)));
-    const double v_end = delta_ > 0.0 ? end.v : 0.0;
-    const double v_low = low ? v1_ : std::min(0.0, v_end), v_high = high ? v2_ : std::max(0.0, v_end);
-    range.one_minus_u_max = low ? one_minus_u1_ : std::max(d0_, delta_ > 0.0 ? end.one_minus_u : d0_);
-    const Polynomial p = normal_force_sign(), d = inertia_factor();
-    auto per_mass = [&](double v) {
-      const double dv = evaluate(d, v);
-      return evaluate(p, v) / (2.0 * dv * dv);
-    };
-    double least = std::min(per_mass(v_low), per_mass(v_high));
-    const Polynomial slope = subtract(multiply(derivative(p), d), multiply({2.0}, multiply(p, derivative(d))));
-    for (double v : sign_changes(slope, v_low, v_high)) least = std::min(least, per_mass(v));
-    range.least_normal_force_per_mass = least;
-    return range;
+    return std::visit([t](const auto& s) { return s.range_until(t); }, solution_);
   }
-
 
   static State state_of(const Motion& m) {
     State y;
@@ -433,586 +159,9 @@ class ExactSolution {
   }
 
  private:
-  /// Torque-free symmetric top (transverse moment A'): L is fixed in the world, the body turns
-  /// about it at w = |L|/A' and about its own axis at nu = (A' - C) wZ / A' (Landau & Lifshitz,
-  /// sec. 33): q(t) = exp(t L_world / A') q0 exp(t nu e_Z); omega_perp turns by -nu t in the body.
-  /// The axis moves on its cone: e_Zz(t) = a + b cos(w t) + c sin(w t) = a + rho cos(w t - delta)
-  /// (Rodrigues' rotation of e_Z about L). It falls through the floor first at
-  /// w t = delta + acos(-a / rho) (mod 2 pi). This case runs where the torque m g h vanishes in
-  /// floating point (h = 0, g = 0, or m or g so small that 2 m g h / A' underflows), but the floor
-  /// force R = m (g + z_G'') = m (g - h w^2 rho cos(w t - delta)) can still turn negative: a
-  /// lift-off (found by the fuzz test: missed for g = 0 and for g = 1e-320, and states with R < 0
-  /// published).
-  void init_free_rotation() {
-    kind_ = Kind::kFreeRotation;
-    momentum_world_ = q0_ * Vector3(transverse_ * wx0_, transverse_ * wy0_, axial_ * spin_);
-    body_rate_ = (transverse_ - axial_) * spin_ / transverse_;
-    free_one_minus_a_ = 2.0 * (q0_.x() * q0_.x() + q0_.y() * q0_.y());  // 1 - e_Zz while nothing moves
-    const double momentum = momentum_world_.norm();
-    if (!(momentum > 0.0)) return;  // at rest: nothing moves
-    const double rate = momentum / transverse_;
-    const Vector3 n = momentum_world_ / momentum, axis = q0_ * Vector3::UnitZ();
-    const double a = axis.dot(n) * n.z(), b = axis.z() - a, c = n.cross(axis).z();
-    const double rho = std::hypot(b, c);
-    if (rho == 0.0) return;  // the axis along L, or L vertical: e_Zz and R stay constant
-    const double two_pi = 2.0 * exact_detail::kPi, delta = std::atan2(c, b);
-    free_rate_ = rate, free_rho_ = rho, free_delta_ = delta, free_one_minus_a_ = 1.0 - a;
-    auto ahead = [&](double phase) {  // the first w t >= 0 at that phase (mod 2 pi)
-      phase = std::fmod(phase, two_pi);
-      return phase < 0.0 ? phase + two_pi : phase;
-    };
-    double first = std::numeric_limits<double>::infinity();
-    if (a - rho <= 0.0) {
-      first = ahead(delta + std::acos(std::clamp(-a / rho, -1.0, 1.0)));
-      event_ = Event::kFallen;
-    }
-    // R = m (g + z_G'') with z_G = h e_Zz, so R < 0 while cos(w t - delta) > g / (h w^2 rho): from
-    // w t - delta = -acos(g / (h w^2 rho)) (mod 2 pi) on.
-    const double swing = tip_distance_ * rate * rate * rho;  // the largest downward z_G''
-    if (swing > gravity_) {
-      const double lift_off = ahead(delta - std::acos(gravity_ / swing));
-      if (lift_off < first) {
-        first = lift_off;
-        event_ = Event::kLiftOff;
-      }
-    }
-    if (std::isfinite(first)) event_time_ = t0_ + first / rate;
-  }
+  const exact_detail::Quadrature* quadrature() const { return std::get_if<exact_detail::Quadrature>(&solution_); }
 
-  Motion free_rotation(double dt) const {
-    const Vector3 turn = dt / transverse_ * momentum_world_;
-    const double angle = turn.norm();
-    const Quaternion world_turn =
-        angle > 0.0 ? Quaternion(Eigen::AngleAxisd(angle, turn / angle)) : Quaternion::Identity();
-    const double body_angle = body_rate_ * dt;
-    const Quaternion q = world_turn * q0_ * Quaternion(std::cos(0.5 * body_angle), 0.0, 0.0, std::sin(0.5 * body_angle));
-    const double c = std::cos(body_angle), s = std::sin(body_angle);
-    return {Complex(q.w(), q.z()), Complex(q.x(), q.y()), Complex(c * wx0_ + s * wy0_, -s * wx0_ + c * wy0_)};
-  }
-
-  void init_quadrature(const State& y0, const Vector3& gamma, double sin2) {
-    using exact_detail::kEpsilon;
-    kind_ = Kind::kQuadrature;
-    const double qx = y0[state_index::kQx], qy = y0[state_index::kQy];
-    u0_ = gamma.z();
-    d0_ = 2.0 * (qx * qx + qy * qy);  // 1 - u0 without cancellation
-    c_ = axial_ * spin_ / transverse_;
-    // From the state (Gamma_perp = sin(theta) e^{i(pi/2 - psi)}): udot = omega_Y Gamma_X -
-    // omega_X Gamma_Y, p = sin^2(theta) phidot = omega . Gamma_perp.
-    const double u_dot0 = wy0_ * gamma.x() - wx0_ * gamma.y();
-    p0_ = wx0_ * gamma.x() + wy0_ * gamma.y();
-    // A planar motion (phidot = 0) computed from rotated components leaves p at round-off.
-    if (std::abs(p0_) <= 8.0 * kEpsilon * std::hypot(wx0_, wy0_) * std::sqrt(sin2)) p0_ = 0.0;
-    const double d_start = 1.0 + alpha_d_ * sin2;
-    // K = 2 (E' - m g h u0) / A' = omega_perp^2 + alpha_D udot0^2 (kinetic energy without spin).
-    const double k_energy = wx0_ * wx0_ + wy0_ * wy0_ + alpha_d_ * u_dot0 * u_dot0;
-    // Taylor coefficients of f(u0 + v) = f0 + f1 v + f2 v^2 + kappa v^3.
-    f0_ = u_dot0 * u_dot0 * d_start;
-    f1_ = -kappa_ * sin2 - 2.0 * u0_ * k_energy + 2.0 * c_ * p0_;
-    f2_ = 2.0 * kappa_ * u0_ - k_energy - c_ * c_;
-    find_turning_points();
-    delta_ = v2_ - v1_;
-    // The distances of the turning points from the vertical, 1 - u1, 1 - u2, u3 - 1, and from the
-    // downward vertical, 1 + u1, 1 + u2, to full relative precision (end_roots()).
-    const double p_up = p0_ - c_ * d0_, p_down = p0_ + c_ * (2.0 - d0_);  // p(1), p(-1)
-    end_roots(p_up, p_down, k_energy);
-    // mu^2 = kappa (u3 - u1); for kappa = 0 (u3 -> infinity) its limit -f2 (Vieta).
-    mu2_ = kappa_ > 0.0 ? kappa_ * (one_minus_u1_ - one_minus_u3_) : -f2_;  // (u3 - 1) + (1 - u1)
-    if (!(mu2_ > 0.0) || !std::isfinite(mu2_))
-      throw MethodRefusal("exact", "nothing drives the nutation (no gravity torque, no spin and no "
-                                           "transverse motion: the cubic vanishes, kappa (u3 - u1) = " +
-                                               exact_detail::format(mu2_) + ", and the phase is undefined)", "dop853");
-    mu_ = std::sqrt(mu2_);
-    // k'^2 = (u3 - u2)/(u3 - u1): near the separatrix both u3 - 1 and 1 - u2 are small.
-    const double complement =
-        kappa_ > 0.0 ? std::sqrt((one_minus_u2_ - one_minus_u3_) / (one_minus_u1_ - one_minus_u3_)) : 1.0;
-    if (!(complement > 0.0))
-      throw MethodRefusal("exact", "the motion lies on the separatrix (k = 1: it approaches the unstable vertical "
-                             "for ever and its period is infinite)", "dop853");
-    modulus_ = elliptic::JacobiModulus(std::min(1.0, complement));
-    kappa_u3_minus_1_ = kappa_ > 0.0 ? -kappa_ * one_minus_u3_ : mu2_;
-    kappa_u3_plus_1_ = mu2_ + kappa_ * one_plus_u1_;
-    // Signs of the pole parts: p(1) = p0 - c (1 - u0), p(-1) = p0 + c (1 + u0).
-    sign_up_ = p_up >= 0.0 ? 1.0 : -1.0;
-    sign_down_ = p_down >= 0.0 ? 1.0 : -1.0;
-    pole_up_ = sign_up_ * std::sqrt(one_minus_u1_ * one_minus_u2_);
-    pole_down_ = sign_down_ * std::sqrt(one_plus_u1_ * one_plus_u2_);
-    // |omega| bounds |Omega| (K(u1) = omega_perp^2 + alpha_D udot^2 at the lowest point) and sets
-    // the round-off of Omega = (2 betadot + i wZ beta)/alpha, whose terms are ~ |omega| each.
-    rate_scale_ = std::sqrt(std::max(k_energy - kappa_ * v1_, 0.0) + spin_ * spin_) + 1e-300;
-    build_series();
-    // The start's phase w0 in [0, 2K): sn^2 = (u0 - u1)/(u2 - u1), cn^2 = (u2 - u0)/(u2 - u1),
-    // dn^2 = (u3 - u0)/(u3 - u1), from the roots without cancellation; u rises on (0, K).
-    const double quarter = modulus_.quarter_period();
-    if (delta_ > 0.0) {
-      const double sn2 = -v1_ / delta_, cn2 = v2_ / delta_;
-      const double dn2 = kappa_ > 0.0 ? (d0_ - one_minus_u3_) / (one_minus_u1_ - one_minus_u3_) : 1.0;
-      const double w = elliptic::inverse_sn(std::sqrt(sn2), cn2, dn2);
-      w0_ = u_dot0 >= 0.0 ? w : 2.0 * quarter - w;
-      if (u_dot0 == 0.0 && v2_ == 0.0) w0_ = quarter;  // at the upper turning point exactly
-    } else {
-      w0_ = 0.0;  // steady precession: every phase is the same state
-    }
-    time_of_w0_ = time_of_phase(w0_);
-    period_ = 2.0 * quarter * mean_[0];
-    alpha_turn_ = -std::polar(1.0, 2.0 * quarter * mean_[1]);
-    beta_turn_ = -std::polar(1.0, 2.0 * quarter * mean_[2]);
-    // Offsets: alpha(w0) = alpha0 fixes e^{i a}; beta's from beta0 and betadot0 together, which
-    // stays well posed when the start is at the vertical (beta0 = 0).
-    alpha_offset_ = beta_offset_ = Complex(1.0, 0.0);
-    const Complex alpha0(q0_.w(), q0_.z()), beta0(q0_.x(), q0_.y()), omega0(wx0_, wy0_);
-    const Motion start = motion_at_phase(w0_, &beta_rate_free_);
-    alpha_offset_ = unit(alpha0 / start.alpha);
-    const Complex beta_rate0 = 0.5 * (alpha0 * omega0 - Complex(0.0, spin_) * beta0);
-    const double rate2 = spin_ * spin_ + std::norm(omega0) + 0.25 * mu2_ / d_start + 1e-300;
-    beta_offset_ = unit(beta0 * std::conj(start.beta) + beta_rate0 * std::conj(beta_rate_free_) / rate2);
-    find_first_event();
-  }
-
-  static Complex unit(Complex z) {
-    const double r = std::abs(z);
-    return r > 0.0 && std::isfinite(r) ? z / r : Complex(1.0, 0.0);
-  }
-
-  /// 1 - u_i and 1 + u_i to full relative precision. They enter where the axis passes near the
-  /// vertical (1 - u2 small: the amplitude of beta there is sqrt((1 - u2)/2)) and near the
-  /// separatrix (u3 - 1 small too: k'), and 1 + u1 for a top swinging through the bottom; from
-  /// the roots in v = u - u0 they would keep only an absolute precision ~ eps. Expanded about
-  /// u = 1 and u = -1 the cubic's constant terms are exact invariants, f(+-1) = -p(+-1)^2, so its
-  /// small roots come out with relative precision: the root of largest magnitude (from the
-  /// v-roots, polished) is divided out from the low end (which keeps the small roots' relative
-  /// accuracy; Wilkinson, Rounding Errors in Algebraic Processes, ch. 2) and the quadratic left is
-  /// solved without cancellation.
-  ///   f(1 - z) = -p(1)^2 + (2 K(1) - 2 c p(1)) z + (2 kappa - K(1) - c^2) z^2 - kappa z^3,
-  ///   f(-1 + y) = -p(-1)^2 + (2 K(-1) + 2 c p(-1)) y - (2 kappa + K(-1) + c^2) y^2 + kappa y^3,
-  /// K(u) = 2 (E' - m g h u)/A' = K(u0) - kappa (u - u0); roots z3 <= 0 <= z2 <= z1, y1 <= y2 <= y3.
-  void end_roots(double p_up, double p_down, double k_energy) {
-    using exact_detail::Polynomial;
-    auto polish = [](const Polynomial& g, double x) {
-      const Polynomial dg = exact_detail::derivative(g);
-      for (int i = 0; i < 4; ++i) {
-        const double slope = exact_detail::evaluate(dg, x);
-        if (slope == 0.0) break;
-        const double next = x - exact_detail::evaluate(g, x) / slope;
-        if (!(std::abs(exact_detail::evaluate(g, next)) < std::abs(exact_detail::evaluate(g, x)))) break;
-        x = next;
-      }
-      return x;
-    };
-    // Roots of q0 + q1 x + q2 x^2 in increasing order, without cancellation.
-    auto quadratic = [](double q0, double q1, double q2) {
-      const double disc = std::sqrt(std::max(0.0, q1 * q1 - 4.0 * q2 * q0));
-      const double s = -0.5 * (q1 + std::copysign(disc, q1));
-      double a = s / q2, b = s != 0.0 ? q0 / s : 0.0;
-      if (a > b) std::swap(a, b);
-      return std::array<double, 2>{a, b};
-    };
-    // Divides g by (x - r) from the constant term up: the quotient's coefficients.
-    auto deflate = [](const Polynomial& g, double r) {
-      const double q0 = -g[0] / r, q1 = (q0 - g[1]) / r;
-      return std::array<double, 2>{q0, q1};
-    };
-    const double k_up = k_energy - kappa_ * d0_, k_down = k_energy + kappa_ * (2.0 - d0_);
-    const Polynomial g = {-p_up * p_up, 2.0 * k_up - 2.0 * c_ * p_up, 2.0 * kappa_ - k_up - c_ * c_, -kappa_};
-    const Polynomial h = {-p_down * p_down, 2.0 * k_down + 2.0 * c_ * p_down, -2.0 * kappa_ - k_down - c_ * c_, kappa_};
-    double z1 = d0_ - v1_, z2 = d0_ - v2_, z3 = -std::numeric_limits<double>::infinity();
-    double y1 = 2.0 - d0_ + v1_, y2 = 2.0 - d0_ + v2_;
-    if (kappa_ > 0.0) {
-      z3 = d0_ - v3_;
-      if (-z3 > z1) {  // u3 is the farthest from 1: z1, z2 from the quotient
-        const double big = polish(g, z3);
-        const std::array<double, 2> q = deflate(g, big);
-        const std::array<double, 2> r = quadratic(q[0], q[1], g[3]);
-        z3 = big, z2 = polish(g, r[0]), z1 = polish(g, r[1]);
-      } else {  // u1 is: z2, z3 from the quotient
-        const double big = polish(g, z1);
-        const std::array<double, 2> q = deflate(g, big);
-        const std::array<double, 2> r = quadratic(q[0], q[1], g[3]);
-        z1 = big, z3 = polish(g, r[0]), z2 = polish(g, r[1]);
-      }
-      const double big = polish(h, 2.0 - d0_ + v3_);  // y3 = 1 + u3 >= 2 - ... is the largest
-      const std::array<double, 2> q = deflate(h, big);
-      const std::array<double, 2> r = quadratic(q[0], q[1], h[3]);
-      y1 = polish(h, r[0]), y2 = polish(h, r[1]);
-    } else if (g[2] != 0.0) {
-      const std::array<double, 2> r = quadratic(g[0], g[1], g[2]);
-      z2 = polish(g, r[0]), z1 = polish(g, r[1]);
-      const std::array<double, 2> s = quadratic(h[0], h[1], h[2]);
-      y1 = polish(h, s[0]), y2 = polish(h, s[1]);
-    }
-    // Each distance from its better source: from the v-roots where that is a sum of positive
-    // terms (1 - u1 = d0 - v1, 1 + u2), or where it does not cancel; from the end expansions
-    // where the v-roots would cancel (the turning point much nearer the vertical than the start).
-    // The end roots come in pairs that may be close to each other (steady precession: z1 ~ z2),
-    // but a root used here is then far from the other two, hence well conditioned.
-    (void)y2;
-    one_minus_u1_ = d0_ - v1_;
-    const double from_v2 = d0_ - v2_;
-    one_minus_u2_ = std::clamp(from_v2 < 0.5 * d0_ ? z2 : from_v2, 0.0, one_minus_u1_);
-    const double from_v3 = d0_ - v3_;  // 1 - u3 <= 0
-    one_minus_u3_ = std::min(0.0, -from_v3 < 0.5 * (v3_ + 1.0) ? z3 : from_v3);
-    const double from_v1 = 2.0 - d0_ + v1_;
-    one_plus_u1_ = std::max(0.0, from_v1 < 0.5 * (2.0 - d0_) ? y1 : from_v1);
-    one_plus_u2_ = 2.0 - d0_ + v2_;
-  }
-
-  /// Roots v1 <= 0 <= v2 <= v3 of f(u0 + v) (v3 = infinity for kappa = 0).
-  void find_turning_points() {
-    using exact_detail::bracketed_root;
-    const double f0 = f0_, f1 = f1_, f2 = f2_, kappa = kappa_;
-    auto f = [&](double v) { return f0 + v * (f1 + v * (f2 + v * kappa)); };
-    auto df = [&](double v) { return f1 + v * (2.0 * f2 + 3.0 * kappa * v); };
-    auto polish = [&](double v) {  // Newton steps on the full cubic while they reduce |f|
-      for (int i = 0; i < 3; ++i) {
-        const double slope = df(v);
-        if (slope == 0.0) break;
-        const double next = v - f(v) / slope;
-        if (!(std::abs(f(next)) < std::abs(f(v)))) break;
-        v = next;
-      }
-      return v;
-    };
-    v3_ = std::numeric_limits<double>::infinity();
-    if (kappa == 0.0) {
-      // f = f0 + f1 v + f2 v^2 with f2 = -K - c^2 < 0 (or f identically 0: nothing moves).
-      if (f2 == 0.0) {
-        v1_ = v2_ = 0.0;
-      } else {
-        const double disc = std::sqrt(std::max(0.0, f1 * f1 - 4.0 * f2 * f0));
-        const double qq = -0.5 * (f1 + std::copysign(disc, f1));
-        const double a = qq / f2, b = qq != 0.0 ? f0 / qq : 0.0;
-        v1_ = std::min(a, b);
-        v2_ = std::max(a, b);
-        if (f0 == 0.0) (std::abs(v1_) < std::abs(v2_) ? v1_ : v2_) = 0.0;
-        v1_ = std::min(v1_, 0.0);
-        v2_ = std::max(v2_, 0.0);
-      }
-    } else if (f0 == 0.0) {
-      // A turning point: v = 0 is a root exactly; deflate to kappa v^2 + f2 v + f1 = kappa (v - a)
-      // (v - b). f = kappa v (v - a)(v - b) is >= 0 between u1 and u2, so: a < 0 < b (f1 < 0)
-      // puts the start at the upper turning point (v1 = a, v2 = 0, v3 = b); 0 < a <= b (f1 > 0)
-      // at the lower one (v1 = 0, v2 = a, v3 = b); f1 = 0 is a double root at the start, a
-      // steady precession (v1 = v2 = 0) if the third root lies above.
-      const double disc = std::sqrt(std::max(0.0, f2 * f2 - 4.0 * kappa * f1));
-      const double qq = -0.5 * (f2 + std::copysign(disc, f2));
-      double a = polish(qq / kappa), b = qq != 0.0 ? polish(f1 / qq) : 0.0;
-      if (a > b) std::swap(a, b);
-      if (f1 < 0.0) {
-        v1_ = std::min(a, 0.0), v2_ = 0.0, v3_ = std::max(b, 0.0);
-      } else if (f1 > 0.0 && a > 0.0) {
-        v1_ = 0.0, v2_ = a, v3_ = b;
-      } else if (f1 == 0.0 && -f2 / kappa >= 0.0) {
-        v1_ = v2_ = 0.0, v3_ = -f2 / kappa;
-      } else {
-        throw MethodRefusal("exact", "the start is a turning point of the nutation with no motion "
-                                             "towards either side (f'(u0) = " + exact_detail::format(f1) +
-                                             ")", "dop853");
-      }
-    } else {
-      // f(0) > 0 >= f(u = -1) = -p(-1)^2 brackets u1 (= -1 when p(-1) = 0: the spinless top
-      // swings through the bottom). u2 lies between 0 and the local minimum of f, the larger
-      // root of f', where f <= 0 (u2 <= 1 <= u3 are both roots beyond 0).
-      const double lo = -1.0 - u0_;
-      v1_ = f(lo) < 0.0 ? bracketed_root(f, df, lo, 0.0) : lo;
-      const double disc = std::sqrt(std::max(0.0, f2 * f2 - 3.0 * kappa * f1));
-      const double minimum = f2 < 0.0 ? (disc - f2) / (3.0 * kappa) : -f1 / (f2 + disc);  // cancellation-free
-      if (!(minimum > 0.0 && f(minimum) <= 0.0))
-        throw MethodRefusal("exact", "the turning points of the nutation cannot be separated "
-                                             "(no root of the cubic above the current tilt)", "dop853");
-      v2_ = bracketed_root(f, df, 0.0, minimum);
-      v3_ = polish(-f2 / kappa - v1_ - v2_);  // Vieta: v1 + v2 + v3 = -f2 / kappa
-      if (v3_ < v2_) v3_ = v2_;
-    }
-    if (!(v1_ <= 0.0 && 0.0 <= v2_ && v2_ <= v3_ && std::isfinite(v1_) && std::isfinite(v2_)))
-      throw MethodRefusal("exact", "the turning points of the nutation cannot be separated "
-                                           "(u - u0 roots " + exact_detail::format(v1_) + ", " +
-                                           exact_detail::format(v2_) + ", " + exact_detail::format(v3_) +
-                                           ")", "dop853");
-  }
-
-  /// What depends on the phase w only through u: sn, cn, dn, 1 -+ u, sqrt(D).
-  struct Phase {
-    double sn, cn, dn, v, one_minus_u, one_plus_u, sqrt_d;
-  };
-  Phase phase_values(const elliptic::JacobiValues& j) const {
-    Phase ph;
-    ph.sn = j.sn;
-    ph.cn = j.cn;
-    ph.dn = j.dn;
-    const double sn2 = j.sn * j.sn, cn2 = j.cn * j.cn;
-    ph.v = v1_ + delta_ * sn2;
-    ph.one_minus_u = one_minus_u1_ * cn2 + one_minus_u2_ * sn2;
-    ph.one_plus_u = one_plus_u1_ * cn2 + one_plus_u2_ * sn2;
-    ph.sqrt_d = std::sqrt(1.0 + alpha_d_ * ph.one_minus_u * ph.one_plus_u);
-    return ph;
-  }
-
-  /// dt/dw, da_r/dw, db_r/dw at a phase (header comment, eqs. for the analytic remainders).
-  std::array<double, 3> integrands(const Phase& ph) const {
-    const double p = p0_ - c_ * ph.v;
-    const double rd = ph.sqrt_d;
-    const double dt_dw = 2.0 * rd / mu_;
-    const double spin_part = spin_ * rd / mu_;
-    const double up = kappa_ == 0.0 ? 0.0 : pole_up_ * kappa_ / (mu_ * (std::sqrt(kappa_u3_minus_1_) + mu_ * ph.dn));
-    const double down = kappa_ == 0.0 ? 0.0 : pole_down_ * kappa_ / (mu_ * (std::sqrt(kappa_u3_plus_1_) + mu_ * ph.dn));
-    const double db = (p * alpha_d_ * ph.one_plus_u / (rd + 1.0) + c_) / mu_ - up - spin_part;
-    const double da = (p * alpha_d_ * ph.one_minus_u / (rd + 1.0) - c_) / mu_ + down + spin_part;
-    return {dt_dw, da, db};
-  }
-
-  /// Series of t, a_r, b_r in x = pi w / K: cosine series of the integrands by a DCT-I of n + 1
-  /// samples on [0, K] (they are even about 0 and K), n doubled until converged (the samples of
-  /// the coarser grid are reused), integrated term by term.
-  void build_series() {
-    using exact_detail::kEpsilon;
-    const double quarter = modulus_.quarter_period();
-    std::vector<std::array<double, 3>> samples;
-    for (int n = 16;; n *= 2) {
-      if (n > exact_detail::kMaxSamples) refuse_series();
-      std::vector<std::array<double, 3>> grid(n + 1);
-      for (int j = 0; j <= n; ++j) {
-        if (!samples.empty() && j % 2 == 0) {
-          grid[j] = samples[j / 2];
-        } else {
-          grid[j] = integrands(phase_values(modulus_.at(quarter * j / n)));
-        }
-      }
-      samples = grid;
-      std::array<std::vector<double>, 3> a;
-      std::array<double, 3> scale = {0.0, 0.0, 0.0};
-      bool converged = true;
-      std::array<std::vector<double>, 3> columns;
-      for (int i = 0; i < 3; ++i) {
-        columns[i].resize(n + 1);
-        for (int j = 0; j <= n; ++j) columns[i][j] = grid[j][i];
-      }
-      // The two angle rates share one FFT (their sizes are alike), the time rate has its own.
-      const auto angles = exact_detail::cosine_coefficients(columns[1], columns[2]);
-      a[0] = exact_detail::cosine_coefficients(columns[0], columns[0])[0];
-      a[1] = angles[0], a[2] = angles[1];
-      // An angle rate's coefficients matter to an absolute eps / K (the angle per half period
-      // K), even where the rate itself vanishes (a spinless top's a_r).
-      scale[1] = scale[2] = 1.0 / quarter;
-      for (int i = 0; i < 3; ++i) {
-        double tail = 0.0;
-        for (int k = 0; k <= n; ++k) {
-          if (!std::isfinite(a[i][k])) refuse_series();
-          scale[i] = std::max(scale[i], std::abs(a[i][k]));
-          if (k > n / 2) tail = std::max(tail, std::abs(a[i][k]));
-        }
-        converged = converged && tail <= 64.0 * kEpsilon * scale[i];
-      }
-      if (!converged) continue;
-      samples_ = n;
-      for (int i = 0; i < 3; ++i) mean_[i] = a[i][0];
-      if (alpha_d_ == 0.0) {
-        mean_[0] = 2.0 / mu_;  // fixed tip: dt/dw = 2/mu exactly
-        for (int k = 1; k <= n; ++k) a[0][k] = 0.0;
-      }
-      // Drop the trailing coefficients below round-off: the time's series apart from the
-      // angles' (Newton's method on t(w) sums only the former).
-      int last_time = n, last_angle = n;
-      while (last_time > 0 && std::abs(a[0][last_time]) <= 0.5 * kEpsilon * scale[0]) --last_time;
-      while (last_angle > 0 && std::abs(a[1][last_angle]) <= 0.5 * kEpsilon * scale[1] &&
-             std::abs(a[2][last_angle]) <= 0.5 * kEpsilon * scale[2])
-        --last_angle;
-      time_sine_.assign(last_time, {0.0});
-      periodic_bound_ = 0.0;
-      time_rate_cosine_.assign(last_time, 0.0);
-      angle_sine_.assign(last_angle, {0.0, 0.0});
-      for (int k = 1; k <= n; ++k) {
-        const double integral = quarter / (exact_detail::kPi * k);
-        if (k <= last_time) {
-          time_sine_[k - 1][0] = a[0][k] * integral, time_rate_cosine_[k - 1] = a[0][k];
-          periodic_bound_ += std::abs(time_sine_[k - 1][0]);
-        }
-        if (k <= last_angle) angle_sine_[k - 1] = {a[1][k] * integral, a[2][k] * integral};
-      }
-      return;
-    }
-  }
-
-  [[noreturn]] void refuse_series() const {
-    throw MethodRefusal("exact", "the series in the nutation phase need more than " +
-                                             std::to_string(exact_detail::kMaxSamples) + " samples (k' = " +
-                                             exact_detail::format(modulus_.complement()) + ")", "dop853");
-  }
-
-  /// t, a_r, b_r at phase w (secular term plus sine series on the reduced phase).
-  std::array<double, 3> integrals(double w) const {
-    const double quarter = modulus_.quarter_period();
-    const double turns = std::floor(w / (2.0 * quarter));
-    const double r = std::fma(-turns, 2.0 * quarter, w);
-    const double x = exact_detail::kPi * r / quarter;
-    const double cos_x = std::cos(x), sin_x = std::sin(x);
-    const std::array<double, 1> time = exact_detail::sine_sums(time_sine_, cos_x, sin_x);
-    const std::array<double, 2> angles = exact_detail::sine_sums(angle_sine_, cos_x, sin_x);
-    return {mean_[0] * w + time[0], mean_[1] * w + angles[0], mean_[2] * w + angles[1]};
-  }
-  double time_of_phase(double w) const {
-    if (alpha_d_ == 0.0) return mean_[0] * w;
-    const double quarter = modulus_.quarter_period();
-    const double turns = std::floor(w / (2.0 * quarter));
-    const double x = exact_detail::kPi * std::fma(-turns, 2.0 * quarter, w) / quarter;
-    return mean_[0] * w + exact_detail::sine_sums(time_sine_, std::cos(x), std::sin(x))[0];
-  }
-
-  /// The phase w at time t: t(w) = t0 + T(w) - T(w0), linear for the fixed tip, else Newton's
-  /// method on the series (dt/dw > 0 is bounded away from 0, so it converges from the secular
-  /// guess in a few iterations).
-  double phase_of_time(double t) const {
-    const double elapsed = t - t0_;
-    double w = w0_ + elapsed / mean_[0];
-    if (alpha_d_ == 0.0) return w;
-    const double quarter = modulus_.quarter_period();
-    const double target = time_of_w0_ + elapsed;
-    // t(w) = mean w + periodic(w) increases with w and |periodic| <= periodic_bound_, so the root
-    // lies in [lo, hi]. Newton's step is kept inside the bracket (bisection otherwise): where dt/dw
-    // varies by orders of magnitude over a period (a frictionless top passing the vertical with
-    // m h^2 / A = 1e4) pure Newton jumped to another branch and gave e_Zz = -0.7 for 0.84 (found
-    // by the fuzz test).
-    double lo = (target - periodic_bound_) / mean_[0], hi = (target + periodic_bound_) / mean_[0];
-    w = std::clamp(w, lo, hi);
-    for (int iteration = 0; iteration < 200; ++iteration) {
-      const double turns = std::floor(w / (2.0 * quarter));
-      const double r = std::fma(-turns, 2.0 * quarter, w);
-      const double x = exact_detail::kPi * r / quarter;
-      const double cos_x = std::cos(x), sin_x = std::sin(x);
-      const double periodic = exact_detail::sine_sums(time_sine_, cos_x, sin_x)[0];
-      const double rate = mean_[0] + exact_detail::cosine_sum(time_rate_cosine_, cos_x);
-      const double residual = mean_[0] * w + periodic - target;
-      if (residual < 0.0) lo = w;
-      if (residual > 0.0) hi = w;
-      double next = w - residual / rate;
-      if (!(next > lo && next < hi)) next = 0.5 * (lo + hi);
-      const double step = next - w;
-      w = next;
-      if (std::abs(step) <= 2.0 * exact_detail::kEpsilon * std::max(1.0, std::abs(w)) || residual == 0.0) break;
-    }
-    return w;
-  }
-
-  /// alpha, beta and Omega at phase w. With beta_rate_free set, also betadot without the
-  /// offset (for the start).
-  Motion motion_at_phase(double w, Complex* beta_rate_free = nullptr) const {
-    const double quarter = modulus_.quarter_period();
-    const double turns = std::floor(w / (2.0 * quarter));
-    const double r = std::fma(-turns, 2.0 * quarter, w);
-    elliptic::JacobiValues j = modulus_.at(r);
-    if (std::fmod(turns, 2.0) != 0.0) j.sn = -j.sn, j.cn = -j.cn;  // sn, cn have period 4K
-    const Phase ph = phase_values(j);
-    const std::array<double, 3> rates = integrands(ph);
-    const double x = exact_detail::kPi * r / quarter;
-    const std::array<double, 2> periodic = exact_detail::sine_sums(angle_sine_, std::cos(x), std::sin(x));
-    const double a = mean_[1] * w + periodic[0], b = mean_[2] * w + periodic[1];
-    const double root_down1 = std::sqrt(one_plus_u1_), root_down2 = std::sqrt(one_plus_u2_);
-    const double root_up1 = std::sqrt(one_minus_u1_), root_up2 = std::sqrt(one_minus_u2_);
-    const Complex g(root_down1 * ph.cn, sign_down_ * root_down2 * ph.sn);
-    const Complex f(root_up1 * ph.cn, sign_up_ * root_up2 * ph.sn);
-    const Complex dg(-root_down1 * ph.sn * ph.dn, sign_down_ * root_down2 * ph.cn * ph.dn);
-    const Complex df(-root_up1 * ph.sn * ph.dn, sign_up_ * root_up2 * ph.cn * ph.dn);
-    const double w_dot = 1.0 / rates[0];
-    constexpr double kRootHalf = 0.70710678118654752440;
-    const Complex turn_a = std::polar(kRootHalf, a), turn_b = std::polar(kRootHalf, b);
-    const Complex i(0.0, 1.0);
-    Motion m;
-    m.alpha = alpha_offset_ * turn_a * g;
-    m.beta = beta_offset_ * turn_b * f;
-    const Complex alpha_dot = alpha_offset_ * turn_a * (i * rates[1] * g + dg) * w_dot;
-    const Complex beta_dot = beta_offset_ * turn_b * (i * rates[2] * f + df) * w_dot;
-    if (beta_rate_free) *beta_rate_free = turn_b * (i * rates[2] * f + df) * w_dot;
-    // Omega from betadot = (alpha Omega - i wZ beta)/2, or from alphadot = (i wZ alpha - beta
-    // conj(Omega))/2 where beta is the larger (|alpha|^2 = (1 + u)/2).
-    if (ph.one_plus_u >= ph.one_minus_u)
-      m.omega = (2.0 * beta_dot + i * spin_ * m.beta) / m.alpha;
-    else
-      m.omega = std::conj((i * spin_ * m.alpha - 2.0 * alpha_dot) / m.beta);
-    return m;
-  }
-
-  /// D(u0 + v) = 1 + alpha_D (1 - u^2) as a polynomial in v = u - u0 (1 for the fixed tip).
-  exact_detail::Polynomial inertia_factor() const {
-    const double sin2 = (2.0 - d0_) * d0_;
-    return {1.0 + alpha_d_ * sin2, -2.0 * alpha_d_ * u0_, -alpha_d_};
-  }
-
-  /// The polynomial with the sign of R: P(v) = 2 g D^2 + h (f' D - f D') in v = u - u0
-  /// (R = m P / (2 D^2), header comment).
-  exact_detail::Polynomial normal_force_sign() const {
-    using namespace exact_detail;
-    const Polynomial f = {f0_, f1_, f2_, kappa_};
-    const Polynomial d = inertia_factor();
-    const Polynomial df = derivative(f), dd = derivative(d);
-    Polynomial p = multiply({2.0 * gravity_}, multiply(d, d));
-    const Polynomial force = subtract(multiply(df, d), multiply(f, dd));
-    p.resize(std::max(p.size(), force.size()), 0.0);
-    for (std::size_t k = 0; k < force.size(); ++k) p[k] += tip_distance_ * force[k];
-    return p;
-  }
-
-  /// The first phase after w0 where R < 0 or e_Zz <= 0 begins (R and e_Zz depend on u only, and
-  /// u(w) = u1 + (u2 - u1) sn^2 rises on (0, K) and falls on (K, 2K)), and its time.
-  void find_first_event() {
-    using namespace exact_detail;
-    if (!(delta_ > 0.0)) return;  // u is constant: the start's validity is for ever
-    const double quarter = modulus_.quarter_period(), period_w = 2.0 * quarter;
-    double best = std::numeric_limits<double>::infinity();
-    Event which = Event::kNone;
-    // The phase in [0, K] of v, and the candidate phase after w0 on the rising or falling branch.
-    auto phase_of_v = [&](double v) {
-      const double sn2 = std::clamp((v - v1_) / delta_, 0.0, 1.0), cn2 = std::clamp((v2_ - v) / delta_, 0.0, 1.0);
-      const double dn2 = (mu2_ - kappa_ * (v - v1_)) / mu2_;
-      return elliptic::inverse_sn(std::sqrt(sn2), cn2, dn2);
-    };
-    auto consider = [&](double w, Event event) {
-      double ahead = std::fmod(w - w0_, period_w);
-      if (ahead < 0.0) ahead += period_w;
-      if (ahead > period_w - 8.0 * kEpsilon * period_w) ahead = 0.0;  // at the start, up to round-off
-      if (ahead < best) best = ahead, which = event;
-    };
-    // Fall: u crosses 0 downwards (u1 <= 0), on the falling branch.
-    if (u0_ + v1_ <= 0.0) consider(period_w - phase_of_v(-u0_), Event::kFallen);
-    // Lift-off: R turns negative where P changes sign in (u1, u2); rising branch if P falls
-    // with u there, falling branch if it rises.
-    const Polynomial p = normal_force_sign(), dp = derivative(p);
-    for (double v : sign_changes(p, v1_, v2_)) {
-      const double slope = evaluate(dp, v);
-      if (slope < 0.0) consider(phase_of_v(v), Event::kLiftOff);
-      if (slope > 0.0) consider(period_w - phase_of_v(v), Event::kLiftOff);
-    }
-    if (which == Event::kNone) return;
-    event_ = which;
-    event_time_ = t0_ + (time_of_phase(w0_ + best) - time_of_w0_);
-  }
-
-  Kind kind_ = Kind::kSleeping;
-  double t0_ = 0.0;
-  double transverse_ = 0.0, alpha_d_ = 0.0, kappa_ = 0.0, spin_ = 0.0, axial_ = 0.0, gravity_ = 0.0,
-         tip_distance_ = 0.0;
-  Quaternion q0_ = Quaternion::Identity();
-  double wx0_ = 0.0, wy0_ = 0.0;
-  double rate_scale_ = 0.0;
-  // Free rotation.
-  Vector3 momentum_world_ = Vector3::Zero();
-  double body_rate_ = 0.0;
-  double free_rate_ = 0.0, free_rho_ = 0.0, free_delta_ = 0.0, free_one_minus_a_ = 0.0;  // e_Zz = a + rho cos(...)
-  // Quadrature: u0, 1 - u0, the cubic's Taylor coefficients about u0 and roots in v = u - u0.
-  double u0_ = 1.0, d0_ = 0.0, c_ = 0.0, p0_ = 0.0, f0_ = 0.0, f1_ = 0.0, f2_ = 0.0;
-  double v1_ = 0.0, v2_ = 0.0, v3_ = 0.0, delta_ = 0.0;
-  double one_minus_u1_ = 0.0, one_minus_u2_ = 0.0, one_minus_u3_ = 0.0, one_plus_u1_ = 0.0, one_plus_u2_ = 0.0;
-  double mu2_ = 0.0, mu_ = 0.0, kappa_u3_minus_1_ = 0.0, kappa_u3_plus_1_ = 0.0;
-  double sign_up_ = 1.0, sign_down_ = 1.0, pole_up_ = 0.0, pole_down_ = 0.0;
-  elliptic::JacobiModulus modulus_;
-  std::array<double, 3> mean_ = {0.0, 0.0, 0.0};
-  std::vector<std::array<double, 1>> time_sine_;   // t(w): sine coefficients (frictionless only)
-  double periodic_bound_ = 0.0;                     // sum of |time_sine_|: bounds t(w) - mean w
-  std::vector<double> time_rate_cosine_;            // dt/dw: cosine coefficients
-  std::vector<std::array<double, 2>> angle_sine_;   // a_r(w), b_r(w)
-  int samples_ = 0;
-  double w0_ = 0.0, time_of_w0_ = 0.0, period_ = 0.0;
-  Complex alpha_turn_{1.0, 0.0}, beta_turn_{1.0, 0.0};
-  Complex alpha_offset_{1.0, 0.0}, beta_offset_{1.0, 0.0}, beta_rate_free_{0.0, 0.0};
-  Event event_ = Event::kNone;
-  double event_time_ = std::numeric_limits<double>::infinity();
+  /// A default solution is a sleeping top at rest at t = 0.
+  std::variant<exact_detail::Sleeping, exact_detail::FreeRotation, exact_detail::Quadrature> solution_;
 };
 }  // namespace spinning_top
