@@ -508,17 +508,6 @@ class Quadrature {
                                              format(modulus_.complement()) + ")", "dop853");
   }
 
-  /// t, a_r, b_r at phase w (secular term plus sine series on the reduced phase).
-  std::array<double, 3> integrals(double w) const {
-    const double quarter = modulus_.quarter_period();
-    const double turns = std::floor(w / (2.0 * quarter));
-    const double r = std::fma(-turns, 2.0 * quarter, w);
-    const double x = kPi * r / quarter;
-    const double cos_x = std::cos(x), sin_x = std::sin(x);
-    const std::array<double, 1> time = sine_sums(time_sine_, cos_x, sin_x);
-    const std::array<double, 2> angles = sine_sums(angle_sine_, cos_x, sin_x);
-    return {mean_[0] * w + time[0], mean_[1] * w + angles[0], mean_[2] * w + angles[1]};
-  }
   double time_of_phase(double w) const {
     if (alpha_d_ == 0.0) return mean_[0] * w;
     const double quarter = modulus_.quarter_period();
