@@ -106,7 +106,7 @@ void print_help(std::ostream& out) {
   for (const ParameterSpec& spec : parameter_specs()) {
     key_width = std::max(key_width, std::strlen(spec.key));
     unit_width = std::max(unit_width, std::strlen(spec.unit));
-    default_width = std::max(default_width, std::strlen(spec.default_value));
+    default_width = std::max(default_width, spec.default_value.size());
   }
   auto pad = [&out](const std::string& text, std::size_t width) {
     out << text << std::string(width + 2 - text.size(), ' ');

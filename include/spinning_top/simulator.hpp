@@ -31,16 +31,19 @@ SceneType parse_scene(const std::string& name);
 /// throws InvalidParameter("integrator", ...).
 IntegratorType parse_integrator(const std::string& name);
 
+/// Defaults: step and tolerance from defaults.def; `type` here (the key table shows its name as the
+/// `integrator` key's default).
 struct IntegratorSettings {
   IntegratorType type = IntegratorType::kAuto;
-  double step = 1e-3;        ///< fixed-step methods: largest substep [s]
-  double tolerance = 1e-12;  ///< adaptive methods: relative and absolute local error tolerance
+  double step = defaults::kStep;            ///< fixed-step methods: largest substep [s]
+  double tolerance = defaults::kTolerance;  ///< adaptive methods: relative and absolute local error tolerance
 };
 
 /// Throws InvalidParameter unless step and tolerance are positive and finite (and the
 /// tolerance is not below what double precision can meet).
 void validate(const IntegratorSettings& settings);
 
+/// Defaults: its parts'; `scene` here (the key table shows its name as the `scene` key's default).
 struct SceneConfig {
   SceneType scene = SceneType::kFixedTip;
   TopParameters top;
