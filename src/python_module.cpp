@@ -98,33 +98,29 @@ py::dict run_trajectory(Simulator& simulator, const py::array_t<double, py::arra
     throw py::value_error("times must start at or after the simulator's time (" + exact_text(simulator.time()) + " s)");
   std::vector<double> time, attitude, rates, com, com_velocity, contact, contact_force, normal_force, energy, work, tilt;
   auto push3 = [](std::vector<double>& v, const Eigen::Vector3d& x) { v.insert(v.end(), x.data(), x.data() + 3); };
-  Event event = simulator.event();
-  py::ssize_t rows = 0;
+  SampledRun sampled;
   {
     py::gil_scoped_release release;
-    for (py::ssize_t i = 0; i < n; ++i) {
-      if (i > 0 && event != Event::kNone) break;
-      event = simulator.advance_to(t(i), WorkBudget::steps_left(max_steps, simulator.steps()));
-      if (event == Event::kNone && simulator.time() < t(i)) break;
-      const Snapshot s = simulator.snapshot();
-      time.push_back(event == Event::kNone ? t(i) : s.time);
-      const Quaternion& q = s.attitude;
-      attitude.insert(attitude.end(), {q.w(), q.x(), q.y(), q.z()});
-      push3(rates, s.body_rates);
-      push3(com, s.outputs.center_of_mass);
-      push3(com_velocity, s.outputs.center_of_mass_velocity);
-      push3(contact, s.outputs.contact_point);
-      push3(contact_force, s.outputs.contact_force);
-      normal_force.push_back(s.outputs.normal_force);
-      energy.push_back(s.outputs.energy);
-      work.push_back(s.outputs.dissipated_energy);
-      tilt.push_back(tilt_of(q));
-      ++rows;
-    }
+    sampled = sample_run(simulator, n, [&](long long i) { return t(i); }, max_steps, StateWhereStepsRunOut::kDrop,
+                         [&](double row_time, const Snapshot& s, Event) {
+                           time.push_back(row_time);
+                           const Quaternion& q = s.attitude;
+                           attitude.insert(attitude.end(), {q.w(), q.x(), q.y(), q.z()});
+                           push3(rates, s.body_rates);
+                           push3(com, s.outputs.center_of_mass);
+                           push3(com_velocity, s.outputs.center_of_mass_velocity);
+                           push3(contact, s.outputs.contact_point);
+                           push3(contact_force, s.outputs.contact_force);
+                           normal_force.push_back(s.outputs.normal_force);
+                           energy.push_back(s.outputs.energy);
+                           work.push_back(s.outputs.dissipated_energy);
+                           tilt.push_back(tilt_of(q));
+                         });
   }
-  if (rows < n && event == Event::kNone)
+  if (sampled.out_of_steps)
     throw StepBudgetExceeded("the run needs more than max_steps " + exact_text(max_steps) + " integration steps (at t = " +
                              exact_text(simulator.time()) + " s) with " + simulator.integrator_description());
+  const py::ssize_t rows = static_cast<py::ssize_t>(time.size());
   auto column = [rows](std::vector<double>& v, py::ssize_t width) {
     if (width == 1) return py::array_t<double>(rows, v.data());
     return py::array_t<double>({rows, width}, v.data());
@@ -141,7 +137,7 @@ py::dict run_trajectory(Simulator& simulator, const py::array_t<double, py::arra
   d["contact_point"] = column(contact, 3);
   d["energy"] = column(energy, 1);
   d["friction_work"] = column(work, 1);
-  d["event"] = std::string(to_string(event));
+  d["event"] = std::string(to_string(sampled.event));
   return d;
 }
 

@@ -301,23 +301,19 @@ void write_row(std::FILE* out, double t, const Snapshot& s, Event event) {
 Event run(Simulator& simulator, const SampleTimes& times, double max_steps, std::FILE* out) {
   std::fprintf(out, "# integrator: %s\n", simulator.integrator_description().c_str());
   std::fprintf(out, "%s\n", kCsvHeader);
-  // An initial state that already violates the model is an event at t = 0.
-  Event event = simulator.event();
-  write_row(out, 0.0, simulator.snapshot(), event);
-  for (long long i = 1; i < times.count() && event == Event::kNone; ++i) {
-    const double t = times.at(i);
-    event = simulator.advance_to(t, WorkBudget::steps_left(max_steps, simulator.steps()));
-    if (event == Event::kNone && simulator.time() < t) {
-      char where[160];
-      std::snprintf(where, sizeof where, " (at t = %.9g s of %.9g s)", simulator.time(), times.at(times.count() - 1));
-      throw StepBudgetExceeded("the run needs more than --max-steps " + std::to_string(static_cast<long>(max_steps)) +
-                               " integration steps" + where + " with " + simulator.integrator_description() +
-                               ": raise --max-steps, shorten --duration, or loosen step / tolerance");
-    }
-    // On an event, time() is the event time, which replaces the scheduled instant.
-    write_row(out, event == Event::kNone ? t : simulator.time(), simulator.snapshot(), event);
+  // An initial state that already violates the model is an event at t = 0; on an event, time()
+  // is the event time, which replaces the scheduled instant.
+  const SampledRun sampled =
+      sample_run(simulator, times.count(), [&](long long i) { return times.at(i); }, max_steps,
+                 StateWhereStepsRunOut::kDrop, [&](double t, const Snapshot& s, Event event) { write_row(out, t, s, event); });
+  if (sampled.out_of_steps) {
+    char where[160];
+    std::snprintf(where, sizeof where, " (at t = %.9g s of %.9g s)", simulator.time(), times.at(times.count() - 1));
+    throw StepBudgetExceeded("the run needs more than --max-steps " + std::to_string(static_cast<long>(max_steps)) +
+                             " integration steps" + where + " with " + simulator.integrator_description() +
+                             ": raise --max-steps, shorten --duration, or loosen step / tolerance");
   }
-  return event;
+  return sampled.event;
 }
 
 // The temporary output file, removed if a signal ends the run (unlink is async-signal-safe).
