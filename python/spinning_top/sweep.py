@@ -26,22 +26,9 @@ import numpy as np
 
 from spinning_top import _core
 
-#: The columns each case adds to its row, after the varied keys.
-OUTCOME_COLUMNS = {
-    "outcome": "none (ran to the duration), lift_off, fallen, energy_drift, non_finite, out_of_steps, refused",
-    "event_time": "[s] time of the event, empty if none",
-    "end_time": "[s] the duration, the event's time, or where max_steps ran out",
-    "min_normal_force": "[N] least R over the run (exact: closed form; time-steppers: the samples)",
-    "max_tilt": "[rad] largest angle of the axis from the vertical (likewise)",
-    "final_tilt": "[rad] at end_time",
-    "final_energy": "[J] E at end_time",
-    "friction_work": "[J] work done against friction by end_time (viscous)",
-    "energy_balance_error": "max |B - B0| / (|B0| + m g h), B = E - C wZ^2/2 + W (exact: at the end)",
-    "method": "the integrator that ran (auto's choice)",
-    "fallback": "auto ran its fallback (exact refused the state)",
-    "steps": "integration steps taken (exact: requests)",
-    "message": "why the core refused the case (outcome refused)",
-}
+#: The columns each case adds to its row, after the varied keys: name -> what it holds (the unit
+#: first), in order. The core's run_cases writes them (its one list of them).
+OUTCOME_COLUMNS = dict(_core.outcome_columns())
 
 #: Cases per batch at most: ~0.1 s of fixed-tip work, small against a Dask task's ~1 ms cost.
 MAX_BATCH = 4096
