@@ -59,10 +59,10 @@ const std::vector<ParameterSpec>& parameter_specs() {
       {"integrator", "", to_string(IntegratorSettings{}.type), false, integrator_key_description()},
       numeric("step", "s", false,
               "largest substep of the fixed-step integrators; refused beyond 2 / (rate of the fastest motion), "
-              "auto shortens it to half that instead"),
+              "except by auto (its rule: the integrator table)"),
       numeric("tolerance", "", false,
-              "local error tolerance (relative and absolute) of adaptive integrators (auto in the viscous scene: "
-              "dop853 at a tenth of it, radau5 at a hundredth of it)"),
+              "local error tolerance (relative and absolute) of adaptive integrators; auto runs its methods at "
+              "fractions of it (its rule: the integrator table)"),
   };
   return specs;
 }

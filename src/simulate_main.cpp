@@ -176,13 +176,9 @@ void print_help(std::ostream& out) {
     out << row.help << "\n";
   }
   out << "\n"
-         "auto (the default) runs exact for fixed_tip and frictionless; where exact refuses the state (a\n"
-         "few degenerate ones, e.g. an axis vertical while it moves, or g = 0 on the frictionless floor) it\n"
-         "runs dop853 at tolerance "
-      << kAutoFallbackTolerance
-      << " instead. For viscous it runs radau5 at tolerance/100 where friction is stiff (k (1/m +\n"
-         "h^2/A) > 100 x the fastest motion), dop853 at tolerance/10 otherwise. The output's first line\n"
-         "says which method ran and why.\n"
+         "auto, the default, runs what its row says; the states exact refuses are a few degenerate ones,\n"
+         "e.g. an axis vertical while it moves, or g = 0 on the frictionless floor. The output's first\n"
+         "line says which method ran and why.\n"
          "\n"
          "Output: a comment naming the integrator that ran, e.g.\n"
          "  # integrator: auto: exact: closed form, nutation period 0.058 s, 9 Fourier terms\n"

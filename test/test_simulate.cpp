@@ -612,6 +612,7 @@ TEST_F(SimulateTest, HelpDocumentsEveryKeyWithUnitDefaultAndRequirement) {
     }
     EXPECT_TRUE(found) << "--help does not list the integrator " << row.name;
   }
+  EXPECT_NE(r.out.find(spinning_top::auto_rule_summary()), std::string::npos);  // auto's row
 }
 
 }  // namespace
