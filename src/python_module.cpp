@@ -171,35 +171,37 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 struct OutcomeColumn {
   const char* name;
   const char* description;
-  CaseValue (*value)(const CaseResult& r);
+  double CaseOutcome::*number = nullptr;              ///< a number's member of the outcome; NaN if refused
+  CaseValue (*value)(const CaseResult& r) = nullptr;  ///< the other columns' value
+
+  CaseValue of(const CaseResult& r) const {
+    if (number == nullptr) return value(r);
+    return r.outcome ? (*r.outcome).*number : kNaN;
+  }
 };
 const OutcomeColumn kOutcomeColumns[] = {
-    {"outcome", "none (ran to the duration), lift_off, fallen, energy_drift, non_finite, out_of_steps, refused",
+    {"outcome", "none (ran to the duration), lift_off, fallen, energy_drift, non_finite, out_of_steps, refused", nullptr,
      [](const CaseResult& r) -> CaseValue { return r.outcome ? outcome_name(*r.outcome) : std::string("refused"); }},
-    {"event_time", "[s] time of the event, empty if none",
+    {"event_time", "[s] time of the event, empty if none", nullptr,
      [](const CaseResult& r) -> CaseValue {
        return r.outcome && r.outcome->event != Event::kNone ? r.outcome->end_time : kNaN;
      }},
-    {"end_time", "[s] the duration, the event's time, or where max_steps ran out",
-     [](const CaseResult& r) -> CaseValue { return r.outcome ? r.outcome->end_time : kNaN; }},
+    {"end_time", "[s] the duration, the event's time, or where max_steps ran out", &CaseOutcome::end_time},
     {"min_normal_force", "[N] least R over the run (exact: closed form; time-steppers: the samples)",
-     [](const CaseResult& r) -> CaseValue { return r.outcome ? r.outcome->min_normal_force : kNaN; }},
-    {"max_tilt", "[rad] largest angle of the axis from the vertical (likewise)",
-     [](const CaseResult& r) -> CaseValue { return r.outcome ? r.outcome->max_tilt : kNaN; }},
-    {"final_tilt", "[rad] at end_time", [](const CaseResult& r) -> CaseValue { return r.outcome ? r.outcome->final_tilt : kNaN; }},
-    {"final_energy", "[J] E at end_time",
-     [](const CaseResult& r) -> CaseValue { return r.outcome ? r.outcome->final_energy : kNaN; }},
-    {"friction_work", "[J] work done against friction by end_time (viscous)",
-     [](const CaseResult& r) -> CaseValue { return r.outcome ? r.outcome->friction_work : kNaN; }},
+     &CaseOutcome::min_normal_force},
+    {"max_tilt", "[rad] largest angle of the axis from the vertical (likewise)", &CaseOutcome::max_tilt},
+    {"final_tilt", "[rad] at end_time", &CaseOutcome::final_tilt},
+    {"final_energy", "[J] E at end_time", &CaseOutcome::final_energy},
+    {"friction_work", "[J] work done against friction by end_time (viscous)", &CaseOutcome::friction_work},
     {"energy_balance_error", "max |B - B0| / (|B0| + m g h), B = E - C wZ^2/2 + W (exact: at the end)",
-     [](const CaseResult& r) -> CaseValue { return r.outcome ? r.outcome->energy_balance_error : kNaN; }},
-    {"method", "the integrator that ran (auto's choice)",
+     &CaseOutcome::energy_balance_error},
+    {"method", "the integrator that ran (auto's choice)", nullptr,
      [](const CaseResult& r) -> CaseValue { return std::string(r.outcome ? to_string(r.outcome->method) : ""); }},
-    {"fallback", "auto ran its fallback (exact refused the state)",
+    {"fallback", "auto ran its fallback (exact refused the state)", nullptr,
      [](const CaseResult& r) -> CaseValue { return r.outcome && r.outcome->fallback; }},
-    {"steps", "integration steps taken (exact: requests)",
+    {"steps", "integration steps taken (exact: requests)", nullptr,
      [](const CaseResult& r) -> CaseValue { return r.outcome ? static_cast<double>(r.outcome->steps) : kNaN; }},
-    {"message", "why the core refused the case (outcome refused)",
+    {"message", "why the core refused the case (outcome refused)", nullptr,
      [](const CaseResult& r) -> CaseValue { return r.refusal; }},
 };
 
@@ -257,7 +259,7 @@ py::dict run_cases(const py::dict& base, const py::dict& columns, const CaseSett
   py::dict d;
   for (const OutcomeColumn& column : kOutcomeColumns) {
     std::vector<CaseValue> values;
-    for (const CaseResult& result : results) values.push_back(column.value(result));
+    for (const CaseResult& result : results) values.push_back(column.of(result));
     d[column.name] = column_object(values);
   }
   return d;
