@@ -30,6 +30,9 @@ from spinning_top import _core
 #: first), in order. The core's run_cases writes them (its one list of them).
 OUTCOME_COLUMNS = dict(_core.outcome_columns())
 
+#: A case's settings unless told otherwise: the core's (CaseSettings).
+DEFAULT_SETTINGS = _core.CaseSettings()
+
 #: Cases per batch at most: ~0.1 s of fixed-tip work, small against a Dask task's ~1 ms cost.
 MAX_BATCH = 4096
 
@@ -111,8 +114,8 @@ def _client(scheduler):
     return scheduler if isinstance(scheduler, Client) else Client(scheduler)
 
 
-def run(base, cases, duration=10.0, sample_rate=1000.0, max_steps=1e8, scheduler=None, workers=None,
-        batch_size=None, progress=False):
+def run(base, cases, duration=DEFAULT_SETTINGS.duration, sample_rate=DEFAULT_SETTINGS.sample_rate,
+        max_steps=DEFAULT_SETTINGS.max_steps, scheduler=None, workers=None, batch_size=None, progress=False):
     """Runs every case; returns a pandas DataFrame, one row per case in the design's order.
 
     base: the keys every case shares (e.g. load_scene(...)); cases: design(...). The base with
@@ -225,10 +228,13 @@ def main(argv=None):
     parser.add_argument("--design", choices=["grid", "random", "sobol"], default="grid")
     parser.add_argument("--cases", type=int, help="number of cases of a random or sobol design")
     parser.add_argument("--seed", type=int, default=0, help="seed of a random or sobol design (default 0)")
-    parser.add_argument("--duration", type=float, default=10.0, help="[s] each case runs to it or its first event")
-    parser.add_argument("--sample-rate", type=float, default=1000.0,
-                        help="[Hz] samples of a time-stepper's case for its extremes (default 1000; exact needs none)")
-    parser.add_argument("--max-steps", type=float, default=1e8, help="integration steps a case may take (default 1e8)")
+    parser.add_argument("--duration", type=float, default=DEFAULT_SETTINGS.duration,
+                        help="[s] each case runs to it or its first event (default %(default)g)")
+    parser.add_argument("--sample-rate", type=float, default=DEFAULT_SETTINGS.sample_rate,
+                        help="[Hz] samples of a time-stepper's case for its extremes (default %(default)g; exact needs "
+                             "none)")
+    parser.add_argument("--max-steps", type=float, default=DEFAULT_SETTINGS.max_steps,
+                        help="integration steps a case may take (default %(default)g)")
     parser.add_argument("--output", help="rows as .csv or .parquet (default: CSV on stdout)")
     parser.add_argument("--plot", help="stability map as PNG (outcome and event time over --x and --y)")
     parser.add_argument("--value", default="event_time",
