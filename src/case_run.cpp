@@ -14,6 +14,24 @@ SampleTimes::SampleTimes(double duration, double rate) : duration_(duration), ra
   extra_last_ = intervals - static_cast<double>(intervals_) > slack;
 }
 
+SampledRun sample_run(Simulator& simulator, long long count, const std::function<double(long long i)>& time_at,
+                      double max_steps, StateWhereStepsRunOut steps_run_out,
+                      const std::function<void(double t, const Snapshot& state, Event event)>& sample) {
+  SampledRun run;
+  run.event = simulator.event();  // an initial state that already violates the model
+  for (long long i = 0; i < count && (i == 0 || run.event == Event::kNone); ++i) {
+    const double t = time_at(i);
+    run.event = simulator.advance_to(t, WorkBudget::steps_left(max_steps, simulator.steps()));
+    if (run.event == Event::kNone && simulator.time() < t) {
+      run.out_of_steps = true;
+      if (steps_run_out == StateWhereStepsRunOut::kKeep) sample(simulator.time(), simulator.snapshot(), run.event);
+      break;
+    }
+    sample(run.event == Event::kNone ? t : simulator.time(), simulator.snapshot(), run.event);
+  }
+  return run;
+}
+
 void validate(const CaseSettings& settings) {
   auto positive = [](const char* key, double value) {
     if (!(std::isfinite(value) && value > 0.0))
@@ -48,34 +66,31 @@ CaseOutcome run_case(const SceneConfig& config, const CaseSettings& settings) {
   const double scale = std::abs(balance0) + top.mass * top.gravity * top.tip_distance;
   double worst_drift = 0.0;
   outcome.min_normal_force = std::numeric_limits<double>::infinity();
-  auto take = [&](const Snapshot& sample) {
+  auto take = [&](double, const Snapshot& sample, Event) {
+    s = sample;
     outcome.min_normal_force = std::min(outcome.min_normal_force, sample.outputs.normal_force);
     outcome.max_tilt = std::max(outcome.max_tilt, tilt_of(sample.attitude));
     worst_drift = std::max(worst_drift, std::abs(balance(sample) - balance0));
   };
-  take(s);
-
-  Event event = simulator->event();  // an initial state that already violates the model
-  auto advance = [&](double t) {
-    event = simulator->advance_to(t, WorkBudget::steps_left(settings.max_steps, simulator->steps()));
-    s = simulator->snapshot();
-    take(s);
-    if (event == Event::kNone && simulator->time() < t) outcome.out_of_steps = true;
-  };
-  if (simulator->motion_range()) {
-    // Closed form (exact): one request to the end; the extremes over the whole run from the
-    // method, exact where samples would miss a peak between them.
-    if (event == Event::kNone) advance(settings.duration);
+  // The start, then: closed form (exact), one request to the end, and the extremes over the whole
+  // run from the method, exact where samples would miss a peak between them; a time-stepper, the
+  // samples. The state where the steps ran out is the case's end.
+  const bool closed_form = simulator->motion_range().has_value();
+  const SampleTimes times(settings.duration, settings.sample_rate);
+  const SampledRun run =
+      closed_form ? sample_run(*simulator, 2, [&](long long i) { return i == 0 ? 0.0 : settings.duration; },
+                               settings.max_steps, StateWhereStepsRunOut::kKeep, take)
+                  : sample_run(*simulator, times.count(), [&](long long i) { return times.at(i); }, settings.max_steps,
+                               StateWhereStepsRunOut::kKeep, take);
+  if (closed_form) {
     const std::optional<MotionRange> range = simulator->motion_range();
     if (range) {
       outcome.min_normal_force = std::min(outcome.min_normal_force, range->min_normal_force);
       outcome.max_tilt = std::max(outcome.max_tilt, range->max_tilt);
     }
-  } else {
-    const SampleTimes times(settings.duration, settings.sample_rate);
-    for (long long i = 1; i < times.count() && event == Event::kNone && !outcome.out_of_steps; ++i) advance(times.at(i));
   }
-  outcome.event = event;
+  outcome.event = run.event;
+  outcome.out_of_steps = run.out_of_steps;
   outcome.end_time = simulator->time();
   outcome.final_tilt = tilt_of(s.attitude);
   outcome.final_energy = s.outputs.energy;

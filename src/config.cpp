@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <cstdio>
 #include <cstdlib>
+#include <stdexcept>
 
 #include "spinning_top/integrator_registry.hpp"
 
@@ -11,41 +13,56 @@ namespace spinning_top {
 namespace {
 
 /// The integrator key's help: the registry's names (what each one is: integrator_registry()).
-const std::string& integrator_key_description() {
-  static const std::string text = [] {
-    std::string names;
-    for (const IntegratorInfo& row : integrator_registry()) names += (names.empty() ? "" : " | ") + std::string(row.name);
-    return names + " (scenes and kinds: the integrator table)";
-  }();
+std::string integrator_key_description() {
+  std::string names;
+  for (const IntegratorInfo& row : integrator_registry()) names += (names.empty() ? "" : " | ") + std::string(row.name);
+  return names + " (scenes and kinds: the integrator table)";
+}
+
+/// The shortest text that parses back to `value` (strtod), e.g. "0.3", "4e-05", "150".
+std::string shortest_text(double value) {
+  char text[32];
+  for (int digits = 1; digits <= 17; ++digits) {
+    std::snprintf(text, sizeof text, "%.*g", digits, value);
+    if (std::strtod(text, nullptr) == value) break;
+  }
   return text;
+}
+
+/// A numeric key's row, with its default from defaults.def.
+ParameterSpec numeric(const char* key, const char* unit, bool required_in_file, std::string description) {
+  for (const defaults::KeyDefault& entry : defaults::kByKey)
+    if (std::string(entry.key) == key)
+      return {key, unit, shortest_text(entry.value), required_in_file, std::move(description)};
+  throw std::logic_error(std::string("no default for the key ") + key + " in defaults.def");
 }
 
 }  // namespace
 
 const std::vector<ParameterSpec>& parameter_specs() {
   static const std::vector<ParameterSpec> specs = {
-      {"scene", "", "fixed_tip", true, "contact scene: fixed_tip | frictionless | viscous"},
-      {"mass", "kg", "0.1", true, "m, mass of the top"},
-      {"inertia_transverse", "kg m^2", "4e-05", true, "A, transverse principal moment of inertia about G"},
-      {"inertia_axial", "kg m^2", "6e-05", true, "C, moment of inertia about the symmetry axis (C <= 2A)"},
-      {"tip_distance", "m", "0.02", true, "h, distance from the tip to the centre of mass G"},
-      {"gravity", "m/s^2", "9.80665", false, "g, gravitational acceleration"},
-      {"friction", "N s/m", "0", false, "k, viscous friction F = -k v_P on the tip (viscous scene only)"},
-      {"initial/tilt", "rad", "0.3", true, "theta0, initial angle of the axis from the vertical (|theta0| < pi/2)"},
-      {"initial/precession_rate", "rad/s", "0", false, "phidot0, initial precession rate"},
-      {"initial/nutation_rate", "rad/s", "0", false, "thetadot0, initial nutation rate"},
-      {"initial/spin", "rad/s", "150", true, "omega_Z, spin about the symmetry axis (a constant of motion)"},
-      {"initial/heading", "rad", "0", false, "phi0, initial heading (precession angle)"},
-      {"initial/spin_angle", "rad", "0", false, "psi0, initial spin angle"},
-      {"initial/velocity_x", "m/s", "0", false, "initial horizontal velocity of G, x (viscous scene only)"},
-      {"initial/velocity_y", "m/s", "0", false, "initial horizontal velocity of G, y (viscous scene only)"},
-      {"integrator", "", "auto", false, integrator_key_description().c_str()},
-      {"step", "s", "0.001", false,
-       "largest substep of the fixed-step integrators; refused beyond 2 / (rate of the fastest motion), "
-       "auto shortens it to half that instead"},
-      {"tolerance", "", "1e-12", false,
-       "local error tolerance (relative and absolute) of adaptive integrators (auto in the viscous scene: dop853 "
-       "at a tenth of it, radau5 at a hundredth of it)"},
+      {"scene", "", to_string(SceneConfig{}.scene), true, "contact scene: fixed_tip | frictionless | viscous"},
+      numeric("mass", "kg", true, "m, mass of the top"),
+      numeric("inertia_transverse", "kg m^2", true, "A, transverse principal moment of inertia about G"),
+      numeric("inertia_axial", "kg m^2", true, "C, moment of inertia about the symmetry axis (C <= 2A)"),
+      numeric("tip_distance", "m", true, "h, distance from the tip to the centre of mass G"),
+      numeric("gravity", "m/s^2", false, "g, gravitational acceleration"),
+      numeric("friction", "N s/m", false, "k, viscous friction F = -k v_P on the tip (viscous scene only)"),
+      numeric("initial/tilt", "rad", true, "theta0, initial angle of the axis from the vertical (|theta0| < pi/2)"),
+      numeric("initial/precession_rate", "rad/s", false, "phidot0, initial precession rate"),
+      numeric("initial/nutation_rate", "rad/s", false, "thetadot0, initial nutation rate"),
+      numeric("initial/spin", "rad/s", true, "omega_Z, spin about the symmetry axis (a constant of motion)"),
+      numeric("initial/heading", "rad", false, "phi0, initial heading (precession angle)"),
+      numeric("initial/spin_angle", "rad", false, "psi0, initial spin angle"),
+      numeric("initial/velocity_x", "m/s", false, "initial horizontal velocity of G, x (viscous scene only)"),
+      numeric("initial/velocity_y", "m/s", false, "initial horizontal velocity of G, y (viscous scene only)"),
+      {"integrator", "", to_string(IntegratorSettings{}.type), false, integrator_key_description()},
+      numeric("step", "s", false,
+              "largest substep of the fixed-step integrators; refused beyond 2 / (rate of the fastest motion), "
+              "except by auto (its rule: the integrator table)"),
+      numeric("tolerance", "", false,
+              "local error tolerance (relative and absolute) of adaptive integrators; auto runs its methods at "
+              "fractions of it (its rule: the integrator table)"),
   };
   return specs;
 }

@@ -3,6 +3,7 @@
 // goes through.
 #include "spinning_top/integrator_registry.hpp"
 
+#include <string>
 #include <utility>
 
 #include "spinning_top/auto_driver.hpp"  // the auto row's driver, for its kind
@@ -12,10 +13,23 @@ namespace spinning_top {
 
 namespace {
 
+/// A row's help line. auto's is its rule, auto_rule_summary(), built from the constants auto_plan()
+/// runs on (not a copy of it).
+template <IntegratorType type>
+const char* help_of() {
+  if constexpr (type == IntegratorType::kAuto) {
+    static const std::string help =
+        auto_rule_summary() + "; chooses again at reset and live updates, and says what it runs and why";
+    return help.c_str();
+  } else {
+    return Integrator<type>::kHelp;
+  }
+}
+
 template <IntegratorType type>
 IntegratorInfo info_of() {
   using Row = Integrator<type>;
-  return {type, Row::kName, Row::kScenes, kind_of<type>(), Row::kStepLimit, Row::kHelp, Row::kSceneNote};
+  return {type, Row::kName, Row::kScenes, kind_of<type>(), Row::kStepLimit, help_of<type>(), Row::kSceneNote};
 }
 
 template <int... index>

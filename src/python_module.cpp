@@ -6,11 +6,15 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <string>
+#include <utility>
+#include <variant>
 #include <vector>
 
 #include "spinning_top/case_run.hpp"
@@ -51,24 +55,44 @@ ParameterMap to_parameter_map(const py::dict& keys) {
   return values;
 }
 
-py::array_t<double> vector_array(const Eigen::Vector3d& v) { return py::array_t<double>(3, v.data()); }
+void write3(const Eigen::Vector3d& x, double* values) { std::copy(x.data(), x.data() + 3, values); }
+
+/// A state's fields as the module shows them, after its time, in order: the columns of
+/// Simulator.run (one row per time asked for) and the keys of Simulator.snapshot().
+struct StateField {
+  const char* name;
+  py::ssize_t width;  ///< 1: a number; 3 or 4: a vector
+  void (*write)(const Snapshot& s, double* values);
+};
+const StateField kStateFields[] = {
+    {"attitude", 4,
+     [](const Snapshot& s, double* v) {
+       v[0] = s.attitude.w(), v[1] = s.attitude.x(), v[2] = s.attitude.y(), v[3] = s.attitude.z();
+     }},
+    {"body_rates", 3, [](const Snapshot& s, double* v) { write3(s.body_rates, v); }},
+    {"tilt", 1, [](const Snapshot& s, double* v) { *v = tilt_of(s.attitude); }},
+    {"normal_force", 1, [](const Snapshot& s, double* v) { *v = s.outputs.normal_force; }},
+    {"contact_force", 3, [](const Snapshot& s, double* v) { write3(s.outputs.contact_force, v); }},
+    {"center_of_mass", 3, [](const Snapshot& s, double* v) { write3(s.outputs.center_of_mass, v); }},
+    {"center_of_mass_velocity", 3, [](const Snapshot& s, double* v) { write3(s.outputs.center_of_mass_velocity, v); }},
+    {"contact_point", 3, [](const Snapshot& s, double* v) { write3(s.outputs.contact_point, v); }},
+    {"energy", 1, [](const Snapshot& s, double* v) { *v = s.outputs.energy; }},
+    {"friction_work", 1, [](const Snapshot& s, double* v) { *v = s.outputs.dissipated_energy; }},
+};
 
 py::dict snapshot_dict(const Snapshot& s) {
   py::dict d;
-  const Quaternion& q = s.attitude;
-  const double wxyz[4] = {q.w(), q.x(), q.y(), q.z()};
   d["time"] = s.time;
-  d["attitude"] = py::array_t<double>(4, wxyz);
-  d["body_rates"] = vector_array(s.body_rates);
-  d["tilt"] = tilt_of(q);
-  d["normal_force"] = s.outputs.normal_force;
-  d["contact_force"] = vector_array(s.outputs.contact_force);
-  d["center_of_mass"] = vector_array(s.outputs.center_of_mass);
-  d["center_of_mass_velocity"] = vector_array(s.outputs.center_of_mass_velocity);
-  d["contact_point"] = vector_array(s.outputs.contact_point);
-  d["energy"] = s.outputs.energy;
+  for (const StateField& field : kStateFields) {
+    double values[4];
+    field.write(s, values);
+    if (field.width == 1)
+      d[field.name] = values[0];
+    else
+      d[field.name] = py::array_t<double>(field.width, values);
+  }
+  // The snapshot's alone: Simulator.run has no column for it.
   d["vertical_angular_momentum"] = s.outputs.vertical_angular_momentum;
-  d["friction_work"] = s.outputs.dissipated_energy;
   return d;
 }
 
@@ -96,62 +120,111 @@ py::dict run_trajectory(Simulator& simulator, const py::array_t<double, py::arra
   // A row is the state at its time: a time the run has passed has no state to show.
   if (n > 0 && !(t(0) >= simulator.time()))
     throw py::value_error("times must start at or after the simulator's time (" + exact_text(simulator.time()) + " s)");
-  std::vector<double> time, attitude, rates, com, com_velocity, contact, contact_force, normal_force, energy, work, tilt;
-  auto push3 = [](std::vector<double>& v, const Eigen::Vector3d& x) { v.insert(v.end(), x.data(), x.data() + 3); };
-  Event event = simulator.event();
-  py::ssize_t rows = 0;
+  std::vector<double> time;
+  std::vector<std::vector<double>> fields(std::size(kStateFields));  // kStateFields' columns, row after row
+  SampledRun sampled;
   {
     py::gil_scoped_release release;
-    for (py::ssize_t i = 0; i < n; ++i) {
-      if (i > 0 && event != Event::kNone) break;
-      event = simulator.advance_to(t(i), WorkBudget::steps_left(max_steps, simulator.steps()));
-      if (event == Event::kNone && simulator.time() < t(i)) break;
-      const Snapshot s = simulator.snapshot();
-      time.push_back(event == Event::kNone ? t(i) : s.time);
-      const Quaternion& q = s.attitude;
-      attitude.insert(attitude.end(), {q.w(), q.x(), q.y(), q.z()});
-      push3(rates, s.body_rates);
-      push3(com, s.outputs.center_of_mass);
-      push3(com_velocity, s.outputs.center_of_mass_velocity);
-      push3(contact, s.outputs.contact_point);
-      push3(contact_force, s.outputs.contact_force);
-      normal_force.push_back(s.outputs.normal_force);
-      energy.push_back(s.outputs.energy);
-      work.push_back(s.outputs.dissipated_energy);
-      tilt.push_back(tilt_of(q));
-      ++rows;
-    }
+    sampled = sample_run(simulator, n, [&](long long i) { return t(i); }, max_steps, StateWhereStepsRunOut::kDrop,
+                         [&](double row_time, const Snapshot& s, Event) {
+                           time.push_back(row_time);
+                           for (std::size_t k = 0; k < fields.size(); ++k) {
+                             fields[k].resize(fields[k].size() + kStateFields[k].width);
+                             kStateFields[k].write(s, fields[k].data() + fields[k].size() - kStateFields[k].width);
+                           }
+                         });
   }
-  if (rows < n && event == Event::kNone)
+  if (sampled.out_of_steps)
     throw StepBudgetExceeded("the run needs more than max_steps " + exact_text(max_steps) + " integration steps (at t = " +
                              exact_text(simulator.time()) + " s) with " + simulator.integrator_description());
+  const py::ssize_t rows = static_cast<py::ssize_t>(time.size());
   auto column = [rows](std::vector<double>& v, py::ssize_t width) {
     if (width == 1) return py::array_t<double>(rows, v.data());
     return py::array_t<double>({rows, width}, v.data());
   };
   py::dict d;
   d["time"] = column(time, 1);
-  d["attitude"] = column(attitude, 4);
-  d["body_rates"] = column(rates, 3);
-  d["tilt"] = column(tilt, 1);
-  d["normal_force"] = column(normal_force, 1);
-  d["contact_force"] = column(contact_force, 3);
-  d["center_of_mass"] = column(com, 3);
-  d["center_of_mass_velocity"] = column(com_velocity, 3);
-  d["contact_point"] = column(contact, 3);
-  d["energy"] = column(energy, 1);
-  d["friction_work"] = column(work, 1);
-  d["event"] = std::string(to_string(event));
+  for (std::size_t k = 0; k < fields.size(); ++k) d[kStateFields[k].name] = column(fields[k], kStateFields[k].width);
+  d["event"] = std::string(to_string(sampled.event));
   return d;
 }
 
-const char* outcome_name(const CaseOutcome& o) {
+std::string outcome_name(const CaseOutcome& o) {
   if (o.out_of_steps) return "out_of_steps";
   return o.event == Event::kNone ? "none" : to_string(o.event);
 }
 
-/// Cases base + (key = columns[key][i]) for i = 0..n-1, run without the GIL. A case the core
-/// refuses is a row with outcome "refused" and the core's message; every other column NaN.
+/// A case as run_cases reports it: its outcome, or the core's refusal.
+struct CaseResult {
+  std::optional<CaseOutcome> outcome;  ///< empty: the core refused the case
+  std::string refusal;                 ///< the core's message, for a refused case
+};
+
+/// A case's value in one column: a number, a flag or a text.
+using CaseValue = std::variant<double, bool, std::string>;
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+/// run_cases' columns, in order: its dict's keys, each case's values and what each holds (the
+/// unit first), which the sweep shows (sweep.OUTCOME_COLUMNS, from outcome_columns()). A refused
+/// case: outcome "refused" and the core's message; NaN in every number, false, "" elsewhere.
+struct OutcomeColumn {
+  const char* name;
+  const char* description;
+  double CaseOutcome::*number = nullptr;              ///< a number's member of the outcome; NaN if refused
+  CaseValue (*value)(const CaseResult& r) = nullptr;  ///< the other columns' value
+
+  CaseValue of(const CaseResult& r) const {
+    if (number == nullptr) return value(r);
+    return r.outcome ? (*r.outcome).*number : kNaN;
+  }
+};
+const OutcomeColumn kOutcomeColumns[] = {
+    {"outcome", "none (ran to the duration), lift_off, fallen, energy_drift, non_finite, out_of_steps, refused", nullptr,
+     [](const CaseResult& r) -> CaseValue { return r.outcome ? outcome_name(*r.outcome) : std::string("refused"); }},
+    {"event_time", "[s] time of the event, empty if none", nullptr,
+     [](const CaseResult& r) -> CaseValue {
+       return r.outcome && r.outcome->event != Event::kNone ? r.outcome->end_time : kNaN;
+     }},
+    {"end_time", "[s] the duration, the event's time, or where max_steps ran out", &CaseOutcome::end_time},
+    {"min_normal_force", "[N] least R over the run (exact: closed form; time-steppers: the samples)",
+     &CaseOutcome::min_normal_force},
+    {"max_tilt", "[rad] largest angle of the axis from the vertical (likewise)", &CaseOutcome::max_tilt},
+    {"final_tilt", "[rad] at end_time", &CaseOutcome::final_tilt},
+    {"final_energy", "[J] E at end_time", &CaseOutcome::final_energy},
+    {"friction_work", "[J] work done against friction by end_time (viscous)", &CaseOutcome::friction_work},
+    {"energy_balance_error", "max |B - B0| / (|B0| + m g h), B = E - C wZ^2/2 + W (exact: at the end)",
+     &CaseOutcome::energy_balance_error},
+    {"method", "the integrator that ran (auto's choice)", nullptr,
+     [](const CaseResult& r) -> CaseValue { return std::string(r.outcome ? to_string(r.outcome->method) : ""); }},
+    {"fallback", "auto ran its fallback (exact refused the state)", nullptr,
+     [](const CaseResult& r) -> CaseValue { return r.outcome && r.outcome->fallback; }},
+    {"steps", "integration steps taken (exact: requests)", nullptr,
+     [](const CaseResult& r) -> CaseValue { return r.outcome ? static_cast<double>(r.outcome->steps) : kNaN; }},
+    {"message", "why the core refused the case (outcome refused)", nullptr,
+     [](const CaseResult& r) -> CaseValue { return r.refusal; }},
+};
+
+/// A column's values as Python has them: numbers and flags as numpy arrays, texts as a list.
+py::object column_object(const std::vector<CaseValue>& values) {
+  const py::ssize_t n = static_cast<py::ssize_t>(values.size());
+  if (!values.empty() && std::holds_alternative<std::string>(values.front())) {
+    std::vector<std::string> texts;
+    for (const CaseValue& v : values) texts.push_back(std::get<std::string>(v));
+    return py::cast(texts);
+  }
+  if (!values.empty() && std::holds_alternative<bool>(values.front())) {
+    py::array_t<bool> flags(n);
+    for (py::ssize_t i = 0; i < n; ++i) flags.mutable_data()[i] = std::get<bool>(values[i]);
+    return std::move(flags);
+  }
+  py::array_t<double> numbers(n);
+  for (py::ssize_t i = 0; i < n; ++i) numbers.mutable_data()[i] = std::get<double>(values[i]);
+  return std::move(numbers);
+}
+
+/// Cases base + (key = columns[key][i]) for i = 0..n-1, run without the GIL: one row each in
+/// kOutcomeColumns, a case the core refuses too.
 py::dict run_cases(const py::dict& base, const py::dict& columns, const CaseSettings& settings) {
   validate(settings);
   const ParameterMap base_values = to_parameter_map(base);
@@ -170,50 +243,25 @@ py::dict run_cases(const py::dict& base, const py::dict& columns, const CaseSett
   std::vector<const double*> data;
   for (const auto& a : arrays) data.push_back(a.data());
 
-  const double nan = std::numeric_limits<double>::quiet_NaN();
-  py::array_t<double> end_time(n), event_time(n), min_r(n), max_tilt(n), final_tilt(n), energy(n), work(n), balance(n), steps(n);
-  py::array_t<bool> fallback(n);
-  double* columns_out[] = {end_time.mutable_data(), event_time.mutable_data(), min_r.mutable_data(), max_tilt.mutable_data(),
-                           final_tilt.mutable_data(), energy.mutable_data(), work.mutable_data(), balance.mutable_data(),
-                           steps.mutable_data()};
-  bool* fallback_out = fallback.mutable_data();
-  std::vector<std::string> outcome(count), method(count), message(count);
+  std::vector<CaseResult> results(count);
   {
     py::gil_scoped_release release;
     ParameterMap values = base_values;
     for (std::size_t i = 0; i < count; ++i) {
       for (std::size_t k = 0; k < keys.size(); ++k) values[keys[k]] = exact_text(data[k][i]);
       try {
-        const CaseOutcome o = run_case(parse_scene_config(values, /*require_all=*/false), settings);
-        const double row[] = {o.end_time, o.event == Event::kNone ? nan : o.end_time, o.min_normal_force, o.max_tilt,
-                              o.final_tilt, o.final_energy, o.friction_work, o.energy_balance_error,
-                              static_cast<double>(o.steps)};
-        for (std::size_t c = 0; c < 9; ++c) columns_out[c][i] = row[c];
-        fallback_out[i] = o.fallback;
-        outcome[i] = outcome_name(o);
-        method[i] = to_string(o.method);
+        results[i].outcome = run_case(parse_scene_config(values, /*require_all=*/false), settings);
       } catch (const InvalidParameter& e) {
-        for (double* c : columns_out) c[i] = nan;
-        fallback_out[i] = false;
-        outcome[i] = "refused";
-        message[i] = e.what();
+        results[i].refusal = e.what();
       }
     }
   }
   py::dict d;
-  d["outcome"] = outcome;
-  d["event_time"] = event_time;
-  d["end_time"] = end_time;
-  d["min_normal_force"] = min_r;
-  d["max_tilt"] = max_tilt;
-  d["final_tilt"] = final_tilt;
-  d["final_energy"] = energy;
-  d["friction_work"] = work;
-  d["energy_balance_error"] = balance;
-  d["method"] = method;
-  d["fallback"] = fallback;
-  d["steps"] = steps;
-  d["message"] = message;
+  for (const OutcomeColumn& column : kOutcomeColumns) {
+    std::vector<CaseValue> values;
+    for (const CaseResult& result : results) values.push_back(column.of(result));
+    d[column.name] = column_object(values);
+  }
   return d;
 }
 
@@ -269,6 +317,11 @@ PYBIND11_MODULE(_core, m) {
       .def_readonly("sample_rate", &CaseSettings::sample_rate)
       .def_readonly("max_steps", &CaseSettings::max_steps);
   m.def("run_cases", &run_cases, py::arg("base"), py::arg("columns"), py::arg("settings"));
+  m.def("outcome_columns", [] {
+    std::vector<std::pair<std::string, std::string>> columns;
+    for (const OutcomeColumn& column : kOutcomeColumns) columns.emplace_back(column.name, column.description);
+    return columns;
+  });
 
   py::class_<Simulator>(m, "Simulator")
       .def(py::init([](const py::dict& keys, bool require_all) {

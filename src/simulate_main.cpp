@@ -50,8 +50,38 @@ constexpr double kDefaultOutputRate = 100.0;  // [Hz]
 // More rows than this is a typo (and more than a disk holds at ~300 bytes a row).
 constexpr double kMaxOutputIntervals = 1e9;
 
-constexpr const char* kCsvHeader =
-    "t,qw,qx,qy,qz,gx,gy,gz,px,py,normal_force,contact_force_x,contact_force_y,energy,event";
+/// The CSV's numeric columns, in order: the header's names, each row's values (17 significant
+/// digits) and --help's description of them. The text column `event` ends every row.
+struct CsvColumn {
+  const char* name;
+  const char* description;
+  double (*value)(double t, const Snapshot& s);
+};
+const CsvColumn kCsvColumns[] = {
+    {"t", "[s] simulated time", [](double t, const Snapshot&) { return t; }},
+    {"qw", "the attitude q (body -> world), a unit quaternion: w", [](double, const Snapshot& s) { return s.attitude.w(); }},
+    {"qx", "x", [](double, const Snapshot& s) { return s.attitude.x(); }},
+    {"qy", "y", [](double, const Snapshot& s) { return s.attitude.y(); }},
+    {"qz", "z", [](double, const Snapshot& s) { return s.attitude.z(); }},
+    {"gx", "[m] G's position: x", [](double, const Snapshot& s) { return s.outputs.center_of_mass.x(); }},
+    {"gy", "[m] y", [](double, const Snapshot& s) { return s.outputs.center_of_mass.y(); }},
+    {"gz", "[m] z", [](double, const Snapshot& s) { return s.outputs.center_of_mass.z(); }},
+    {"px", "[m] the tip on the floor: x", [](double, const Snapshot& s) { return s.outputs.contact_point.x(); }},
+    {"py", "[m] y", [](double, const Snapshot& s) { return s.outputs.contact_point.y(); }},
+    {"normal_force", "[N] R, the floor's normal force", [](double, const Snapshot& s) { return s.outputs.normal_force; }},
+    {"contact_force_x", "[N] the horizontal floor force on the tip (pivot reaction, friction, or 0): x",
+     [](double, const Snapshot& s) { return s.outputs.contact_force.x(); }},
+    {"contact_force_y", "[N] y", [](double, const Snapshot& s) { return s.outputs.contact_force.y(); }},
+    {"energy", "[J] E", [](double, const Snapshot& s) { return s.outputs.energy; }},
+};
+constexpr const char* kEventColumn = "event";
+
+/// The CSV header: kCsvColumns' names, then the event column.
+std::string csv_header() {
+  std::string header;
+  for (const CsvColumn& column : kCsvColumns) header += std::string(column.name) + ",";
+  return header + kEventColumn;
+}
 
 /// Bad input: reported on stderr with exit code 2 before anything is written.
 class UsageError : public std::runtime_error {
@@ -106,7 +136,7 @@ void print_help(std::ostream& out) {
   for (const ParameterSpec& spec : parameter_specs()) {
     key_width = std::max(key_width, std::strlen(spec.key));
     unit_width = std::max(unit_width, std::strlen(spec.unit));
-    default_width = std::max(default_width, std::strlen(spec.default_value));
+    default_width = std::max(default_width, spec.default_value.size());
   }
   auto pad = [&out](const std::string& text, std::size_t width) {
     out << text << std::string(width + 2 - text.size(), ' ');
@@ -146,13 +176,9 @@ void print_help(std::ostream& out) {
     out << row.help << "\n";
   }
   out << "\n"
-         "auto (the default) runs exact for fixed_tip and frictionless; where exact refuses the state (a\n"
-         "few degenerate ones, e.g. an axis vertical while it moves, or g = 0 on the frictionless floor) it\n"
-         "runs dop853 at tolerance "
-      << kAutoFallbackTolerance
-      << " instead. For viscous it runs radau5 at tolerance/100 where friction is stiff (k (1/m +\n"
-         "h^2/A) > 100 x the fastest motion), dop853 at tolerance/10 otherwise. The output's first line\n"
-         "says which method ran and why.\n"
+         "auto, the default, runs what its row says; the states exact refuses are a few degenerate ones,\n"
+         "e.g. an axis vertical while it moves, or g = 0 on the frictionless floor. The output's first\n"
+         "line says which method ran and why.\n"
          "\n"
          "Output: a comment naming the integrator that ran, e.g.\n"
          "  # integrator: auto: exact: closed form, nutation period 0.058 s, 9 Fourier terms\n"
@@ -161,14 +187,21 @@ void print_help(std::ostream& out) {
          "    fastest motion 225 rad/s)\n"
          "then the CSV header\n"
          "  "
-      << kCsvHeader
+      << csv_header()
       << "\n"
          "then one row per output instant t_i = i / rate from t = 0 to the duration inclusive (a\n"
          "last row at t = duration when it is not a multiple of 1/rate), values with 17\n"
-         "significant digits. q = (qw, qx, qy, qz) is the attitude (body -> world), g = G's\n"
-         "position [m], p = the tip on the floor [m], normal_force R [N], contact_force the\n"
-         "horizontal floor force on the tip [N] (pivot reaction, friction, or 0), energy [J].\n"
-         "event is empty, or lift_off | fallen | non_finite on the last row, at the event time.\n"
+         "significant digits:\n";
+  std::size_t column_width = std::strlen(kEventColumn);
+  for (const CsvColumn& column : kCsvColumns) column_width = std::max(column_width, std::strlen(column.name));
+  for (const CsvColumn& column : kCsvColumns) {
+    out << "  ";
+    pad(column.name, column_width);
+    out << column.description << "\n";
+  }
+  out << "  ";
+  pad(kEventColumn, column_width);
+  out << "empty, or lift_off | fallen | non_finite on the last row, at the event time\n"
          "\n"
          "Exit codes: 0 success (also when an event ends the run early), 1 runtime error\n"
          "(e.g. the output cannot be written), 2 bad input (nothing written), 3 the run needs\n"
@@ -275,23 +308,7 @@ SceneConfig read_scene(const Options& options) {
 }
 
 void write_row(std::FILE* out, double t, const Snapshot& s, Event event) {
-  const Quaternion& q = s.attitude;
-  const ModelOutputs& o = s.outputs;
-  const double values[] = {t,
-                           q.w(),
-                           q.x(),
-                           q.y(),
-                           q.z(),
-                           o.center_of_mass.x(),
-                           o.center_of_mass.y(),
-                           o.center_of_mass.z(),
-                           o.contact_point.x(),
-                           o.contact_point.y(),
-                           o.normal_force,
-                           o.contact_force.x(),
-                           o.contact_force.y(),
-                           o.energy};
-  for (double v : values) std::fprintf(out, "%.17g,", v);
+  for (const CsvColumn& column : kCsvColumns) std::fprintf(out, "%.17g,", column.value(t, s));
   std::fprintf(out, "%s\n", to_string(event));
 }
 
@@ -300,24 +317,20 @@ void write_row(std::FILE* out, double t, const Snapshot& s, Event event) {
 /// would take more than max_steps integration steps (the rows up to there are written).
 Event run(Simulator& simulator, const SampleTimes& times, double max_steps, std::FILE* out) {
   std::fprintf(out, "# integrator: %s\n", simulator.integrator_description().c_str());
-  std::fprintf(out, "%s\n", kCsvHeader);
-  // An initial state that already violates the model is an event at t = 0.
-  Event event = simulator.event();
-  write_row(out, 0.0, simulator.snapshot(), event);
-  for (long long i = 1; i < times.count() && event == Event::kNone; ++i) {
-    const double t = times.at(i);
-    event = simulator.advance_to(t, WorkBudget::steps_left(max_steps, simulator.steps()));
-    if (event == Event::kNone && simulator.time() < t) {
-      char where[160];
-      std::snprintf(where, sizeof where, " (at t = %.9g s of %.9g s)", simulator.time(), times.at(times.count() - 1));
-      throw StepBudgetExceeded("the run needs more than --max-steps " + std::to_string(static_cast<long>(max_steps)) +
-                               " integration steps" + where + " with " + simulator.integrator_description() +
-                               ": raise --max-steps, shorten --duration, or loosen step / tolerance");
-    }
-    // On an event, time() is the event time, which replaces the scheduled instant.
-    write_row(out, event == Event::kNone ? t : simulator.time(), simulator.snapshot(), event);
+  std::fprintf(out, "%s\n", csv_header().c_str());
+  // An initial state that already violates the model is an event at t = 0; on an event, time()
+  // is the event time, which replaces the scheduled instant.
+  const SampledRun sampled =
+      sample_run(simulator, times.count(), [&](long long i) { return times.at(i); }, max_steps,
+                 StateWhereStepsRunOut::kDrop, [&](double t, const Snapshot& s, Event event) { write_row(out, t, s, event); });
+  if (sampled.out_of_steps) {
+    char where[160];
+    std::snprintf(where, sizeof where, " (at t = %.9g s of %.9g s)", simulator.time(), times.at(times.count() - 1));
+    throw StepBudgetExceeded("the run needs more than --max-steps " + std::to_string(static_cast<long>(max_steps)) +
+                             " integration steps" + where + " with " + simulator.integrator_description() +
+                             ": raise --max-steps, shorten --duration, or loosen step / tolerance");
   }
-  return event;
+  return sampled.event;
 }
 
 // The temporary output file, removed if a signal ends the run (unlink is async-signal-safe).

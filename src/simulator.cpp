@@ -42,6 +42,10 @@ std::string format_seconds(double value) {
   std::snprintf(buffer, sizeof buffer, "%.3g", value);
   return buffer;
 }
+
+/// The least tolerance accepted: below ~100 ulps the error estimate is round-off and the
+/// controller cannot converge.
+constexpr double kLeastTolerance = 1e-14;
 }  // namespace
 
 SceneType parse_scene(const std::string& name) {
@@ -56,9 +60,8 @@ void validate(const IntegratorSettings& settings) {
   // 1e-9 s resolves the fastest motion accepted (1e6 rad/s) to 1e-3 rad per step; below it a
   // step only adds substeps (1e-300 s overflowed their count).
   if (!(settings.step >= 1e-9)) throw InvalidParameter("step", "must be at least 1e-9 s");
-  // Below ~100 ulps the error estimate is round-off and the controller cannot converge.
-  if (!std::isfinite(settings.tolerance) || !(settings.tolerance >= 1e-14) || !(settings.tolerance < 1.0))
-    throw InvalidParameter("tolerance", "must lie in [1e-14, 1)");
+  if (!std::isfinite(settings.tolerance) || !(settings.tolerance >= kLeastTolerance) || !(settings.tolerance < 1.0))
+    throw InvalidParameter("tolerance", "must lie in [" + format_seconds(kLeastTolerance) + ", 1)");
 }
 
 double MotionRates::fastest_oscillation() const { return std::max({nutation, pendulum, attitude}); }
@@ -101,7 +104,27 @@ namespace {
 constexpr double kStiffFrictionRatio = 100.0;
 constexpr double kRadauToleranceFactor = 0.01;
 constexpr double kDop853ToleranceFactor = 0.1;
+/// A fixed step auto chooses is at most this share of the largest the method can take, so that
+/// auto is never refused a step.
+constexpr double kAutoStepShare = 0.5;
+
+std::string format_number(double value) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, "%g", value);
+  return buffer;
+}
 }  // namespace
+
+std::string auto_rule_summary() {
+  return "exact where it serves the scene, and dop853 for a state exact refuses, at the tolerance but at most " +
+         format_number(kAutoFallbackTolerance) + "; in the other scenes radau5 at tolerance x " +
+         format_number(kRadauToleranceFactor) + " where friction relaxes the slip more than " +
+         format_number(kStiffFrictionRatio) + " times faster than the fastest motion, k (1/m + h^2/A) > " +
+         format_number(kStiffFrictionRatio) + " max(C |omega_Z|/A', sqrt(m g h/A'), |omega|/2), else dop853 at " +
+         "tolerance x " + format_number(kDop853ToleranceFactor) + " (either at least " +
+         format_number(kLeastTolerance) + "); a fixed step at most " + format_number(kAutoStepShare) +
+         " x the largest the method can take";
+}
 
 AutoPlan auto_plan(const SceneConfig& config) {
   const IntegratorSettings& settings = config.integrator;
@@ -127,8 +150,8 @@ AutoPlan auto_plan(const SceneConfig& config) {
   plan.first = settings;
   plan.first.type = stiff ? IntegratorType::kRadau5 : IntegratorType::kDop853;
   plan.first.tolerance =
-      std::max(1e-14, settings.tolerance * (stiff ? kRadauToleranceFactor : kDop853ToleranceFactor));
-  plan.first.step = std::min(settings.step, 0.5 * largest_fixed_step(config, plan.first.type));
+      std::max(kLeastTolerance, settings.tolerance * (stiff ? kRadauToleranceFactor : kDop853ToleranceFactor));
+  plan.first.step = std::min(settings.step, kAutoStepShare * largest_fixed_step(config, plan.first.type));
   plan.fallback.type = IntegratorType::kAuto;  // neither refuses a state
   plan.reason = std::string(stiff ? "stiff" : "not stiff") + ": friction rate k (1/m + h^2/A) " +
                 format_seconds(rates.friction) + " 1/s " + (stiff ? ">" : "<=") + " " +

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <vector>
 
 #include "core_test_support.hpp"
 #include "spinning_top/case_run.hpp"
@@ -154,6 +155,67 @@ TEST(RunCase, RefusesBadSettingsNamingThem) {
       EXPECT_EQ(e.parameter(), key);
     }
   }
+}
+
+/// (time, state, event) of each sample of sample_run.
+struct Sample {
+  double t;
+  Snapshot state;
+  Event event;
+};
+
+std::vector<Sample> samples_of(const SceneConfig& c, const SampleTimes& times, double max_steps,
+                               StateWhereStepsRunOut steps_run_out, SampledRun& run) {
+  const auto sim = make_simulator(c);
+  std::vector<Sample> samples;
+  run = sample_run(*sim, times.count(), [&](long long i) { return times.at(i); }, max_steps, steps_run_out,
+                   [&](double t, const Snapshot& s, Event e) { samples.push_back({t, s, e}); });
+  return samples;
+}
+
+bool same_state(const Snapshot& a, const Snapshot& b) {
+  return a.time == b.time && a.attitude.coeffs() == b.attitude.coeffs() && a.body_rates == b.body_rates &&
+         a.outputs.energy == b.outputs.energy;
+}
+
+// The one sampling loop (simulate's rows, run_case, Simulator.run): where the steps run out, a
+// case keeps the state reached and a trajectory drops it; every state sampled is the unbounded
+// run's at the same time, bit for bit.
+TEST(SampleRun, KeepsOrDropsTheStateWhereTheStepsRunOut) {
+  const SceneConfig c = toy(SceneType::kFixedTip, 0.3, 150.0, IntegratorType::kRk4);  // 1 ms steps
+  const SampleTimes times(1.0, 100.0);  // 10 steps per sample
+  SampledRun unbounded, dropped, kept;
+  const std::vector<Sample> all = samples_of(c, times, 1e8, StateWhereStepsRunOut::kDrop, unbounded);
+  const std::vector<Sample> drop = samples_of(c, times, 45, StateWhereStepsRunOut::kDrop, dropped);
+  const std::vector<Sample> keep = samples_of(c, times, 45, StateWhereStepsRunOut::kKeep, kept);
+  EXPECT_FALSE(unbounded.out_of_steps);
+  EXPECT_EQ(all.size(), 101u);
+  EXPECT_TRUE(dropped.out_of_steps && kept.out_of_steps);
+  EXPECT_EQ(dropped.event, Event::kNone);
+  ASSERT_EQ(drop.size(), 5u);  // t = 0 .. 0.04; 0.05 is 5 steps beyond the 45
+  ASSERT_EQ(keep.size(), 6u);  // and the state after 45 steps, at its own time
+  for (std::size_t i = 0; i < drop.size(); ++i) {
+    EXPECT_EQ(drop[i].t, times.at(static_cast<long long>(i)));
+    EXPECT_TRUE(same_state(drop[i].state, all[i].state) && same_state(keep[i].state, all[i].state)) << i;
+  }
+  EXPECT_EQ(keep.back().t, keep.back().state.time);
+  EXPECT_GT(keep.back().t, times.at(4));
+  EXPECT_LT(keep.back().t, times.at(5));
+  EXPECT_EQ(keep.back().event, Event::kNone);
+}
+
+// On an event the sample has the event's time instead of the one asked for, and is the last.
+TEST(SampleRun, EndsAtTheFirstEventWithItsTime) {
+  const SceneConfig c = toy(SceneType::kFixedTip, 0.3, 0.0, IntegratorType::kDop853);  // spinless: falls
+  SampledRun run;
+  const std::vector<Sample> samples = samples_of(c, SampleTimes(10.0, 100.0), 1e8, StateWhereStepsRunOut::kDrop, run);
+  EXPECT_EQ(run.event, Event::kFallen);
+  EXPECT_FALSE(run.out_of_steps);
+  ASSERT_GE(samples.size(), 2u);
+  EXPECT_EQ(samples.back().event, Event::kFallen);
+  EXPECT_EQ(samples.back().t, samples.back().state.time);
+  EXPECT_LT(samples.back().t, (samples.size() - 1) / 100.0);
+  for (std::size_t i = 0; i + 1 < samples.size(); ++i) EXPECT_EQ(samples[i].event, Event::kNone);
 }
 
 TEST(SampleTimes, DecimalDurationsGiveTheirRowCount) {

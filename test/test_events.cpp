@@ -15,6 +15,7 @@ using namespace core_test;
 InitialConditions spinless(double tilt, double nutation_rate) {
   InitialConditions ic;
   ic.tilt = tilt;
+  ic.spin = 0.0;
   ic.nutation_rate = nutation_rate;
   return ic;
 }

@@ -548,6 +548,26 @@ TEST_F(SimulateTest, ARunBeyondMaxStepsStopsWithCode3) {
   }
 }
 
+// The CSV's columns are one list: the header that --help shows is the one a run writes, and
+// --help describes each of its columns on a line of its own.
+TEST_F(SimulateTest, HelpDescribesEveryColumnOfTheHeaderItWrites) {
+  const Result help = simulate({"--help"});
+  ASSERT_EQ(help.exit_code, 0) << help.err;
+  const Result run = simulate({"--config", kFixedTipYaml, "--duration", "0.01"});
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  std::istringstream run_lines(run.out);
+  std::string comment, header;
+  std::getline(run_lines, comment);
+  std::getline(run_lines, header);
+  EXPECT_EQ(header, kHeader);
+  const std::size_t shown = help.out.find("then the CSV header\n  " + header + "\n");
+  ASSERT_NE(shown, std::string::npos) << help.out;
+  std::istringstream names(header);
+  for (std::string name; std::getline(names, name, ',');)
+    EXPECT_NE(help.out.find("\n  " + name + " ", shown + 20 + header.size()), std::string::npos)
+        << "--help does not describe the column " << name;
+}
+
 TEST_F(SimulateTest, HelpDocumentsEveryKeyWithUnitDefaultAndRequirement) {
   const Result r = simulate({"--help"});
   ASSERT_EQ(r.exit_code, 0) << r.err;
@@ -592,6 +612,7 @@ TEST_F(SimulateTest, HelpDocumentsEveryKeyWithUnitDefaultAndRequirement) {
     }
     EXPECT_TRUE(found) << "--help does not list the integrator " << row.name;
   }
+  EXPECT_NE(r.out.find(spinning_top::auto_rule_summary()), std::string::npos);  // auto's row
 }
 
 }  // namespace

@@ -104,6 +104,7 @@ TEST(EulerState, InvertsTheInitialConditions) {
   }
   for (const Vector3& rates : {Vector3(0.0, 0.0, 40.0), Vector3(1.5, -2.0, 40.0), Vector3(0.0, 3.0, -5.0)}) {
     InitialConditions upright;
+    upright.tilt = 0.0;
     upright.heading = 0.7;
     const Quaternion q = initial_attitude(upright);
     const EulerState e = euler_state(q, rates);

@@ -4,13 +4,17 @@
 // scene and integrator names; no unknown key, no missing required key in a scene file).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <functional>
 #include <limits>
 #include <string>
+#include <type_traits>
 
 #include "core_test_support.hpp"
 #include "spinning_top/config.hpp"
+#include "spinning_top/defaults.hpp"
 
 namespace spinning_top {
 namespace {
@@ -183,6 +187,41 @@ ParameterMap scene_file() {
   for (const ParameterSpec& spec : parameter_specs())
     if (spec.required_in_file) values[spec.key] = spec.default_value;
   return values;
+}
+
+/// The bits of a struct of doubles (TopParameters, InitialConditions): equal only if every
+/// member is the same double, and a member added later is compared too.
+template <class Doubles>
+bool same_bits(const Doubles& a, const Doubles& b) {
+  static_assert(sizeof(Doubles) % sizeof(double) == 0 && std::is_trivially_copyable_v<Doubles>);
+  return std::memcmp(&a, &b, sizeof(Doubles)) == 0;
+}
+
+// One source for each default (defaults.def, issue 17): the key table's defaults, as the node and
+// a scene file without the key get them, are the structs' own, bit for bit; a default written
+// again in either place and changed in one of them fails here.
+TEST(Defaults, TheKeyTableGivesTheStructsDefaults) {
+  const SceneConfig parsed = parse_scene_config({}, /*require_all=*/false);
+  const SceneConfig built;
+  EXPECT_EQ(parsed.scene, built.scene);
+  EXPECT_TRUE(same_bits(parsed.top, built.top));
+  EXPECT_TRUE(same_bits(parsed.initial, built.initial));
+  EXPECT_EQ(parsed.integrator.type, built.integrator.type);
+  EXPECT_TRUE(same_bits(parsed.integrator.step, built.integrator.step));
+  EXPECT_TRUE(same_bits(parsed.integrator.tolerance, built.integrator.tolerance));
+  // Every numeric key's default is defaults.def's entry, and every entry but the node's pacing
+  // is a key of the table.
+  int numeric = 0;
+  for (const defaults::KeyDefault& entry : defaults::kByKey) {
+    const std::string key = entry.key;
+    if (key == "rate" || key == "real_time_factor") continue;  // the node's (NodeSettings)
+    const auto spec = std::find_if(parameter_specs().begin(), parameter_specs().end(),
+                                   [&](const ParameterSpec& s) { return s.key == key; });
+    ASSERT_NE(spec, parameter_specs().end()) << key << " of defaults.def is not in the key table";
+    EXPECT_TRUE(same_bits(parse_number(key, spec->default_value), entry.value)) << key;
+    ++numeric;
+  }
+  EXPECT_EQ(numeric + 2, static_cast<int>(parameter_specs().size()));  // + scene, integrator
 }
 
 void expect_parse_refused(const ParameterMap& values, bool require_all, const std::string& key,

@@ -3,6 +3,7 @@
 // sweep run this, so that a case is computed by the core alone, without Python per sample.
 #pragma once
 
+#include <functional>
 #include <string>
 
 #include "spinning_top/simulator.hpp"
@@ -24,6 +25,28 @@ class SampleTimes {
   long long intervals_ = 0;
   bool extra_last_ = false;
 };
+
+/// What a sampling run keeps of the state where its steps ran out (time() short of the time asked
+/// for): a case keeps it as its last sample (its extremes and end state include it); a trajectory
+/// (simulate's rows, Simulator.run in Python) has rows at the times asked for only and drops it.
+enum class StateWhereStepsRunOut { kKeep, kDrop };
+
+/// How a sampling run ended.
+struct SampledRun {
+  Event event = Event::kNone;  ///< the event that ended it; kNone: it reached the last time, or ran out of steps
+  bool out_of_steps = false;   ///< its allowance of integration steps ran out before the last time
+};
+
+/// The sampling loop of every front end (simulate's rows, run_case's samples, Simulator.run):
+/// advances `simulator` to time_at(i) for i = 0 .. count - 1 (increasing; time_at(0) may be the
+/// simulator's time: then its state there, or its event) within an allowance of max_steps
+/// integration steps for the whole run (WorkBudget::steps_left), and hands each state reached to
+/// sample(t, state, event). t is the time asked for, or on an event the event's time, which
+/// replaces it; the run ends at its first event. Where the steps run out, `steps_run_out` says
+/// whether the state reached is sampled too (at its own time, with no event).
+SampledRun sample_run(Simulator& simulator, long long count, const std::function<double(long long i)>& time_at,
+                      double max_steps, StateWhereStepsRunOut steps_run_out,
+                      const std::function<void(double t, const Snapshot& state, Event event)>& sample);
 
 struct CaseSettings {
   double duration = 10.0;       ///< [s] run until then, or to the first event

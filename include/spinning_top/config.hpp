@@ -13,9 +13,11 @@ namespace spinning_top {
 struct ParameterSpec {
   const char* key;            ///< e.g. "initial/tilt" (YAML: initial: {tilt: ...})
   const char* unit;           ///< SI unit, "" for text
-  const char* default_value;  ///< used when the key is absent
+  /// Used when the key is absent: SceneConfig{}'s value (defaults.def) as text that parses back
+  /// to it, bit for bit.
+  std::string default_value;
   bool required_in_file;      ///< a scene file (batch simulator) must give it
-  const char* description;
+  std::string description;
 };
 
 /// Every key, in documentation order.

@@ -5,31 +5,35 @@
 #include <stdexcept>
 #include <string>
 
+#include "spinning_top/defaults.hpp"
+
 namespace spinning_top {
 
-/// The rigid body and its environment.
+/// The rigid body and its environment. Defaults: defaults.def (the toy top of config/*.yaml).
 struct TopParameters {
-  double mass = 0.1;                 ///< m [kg]
-  double inertia_transverse = 4e-5;  ///< A [kg m^2], transverse principal moment about G
-  double inertia_axial = 6e-5;       ///< C [kg m^2], moment about the symmetry axis
-  double tip_distance = 0.02;        ///< h [m], distance from the tip P to the centre of mass G
-  double gravity = 9.80665;          ///< g [m/s^2]
-  double friction = 0.0;             ///< k [N s/m], viscous friction F = -k v_P (viscous scene)
+  double mass = defaults::kMass;  ///< m [kg]
+  double inertia_transverse = defaults::kInertiaTransverse;  ///< A [kg m^2], transverse principal moment about G
+  double inertia_axial = defaults::kInertiaAxial;  ///< C [kg m^2], moment about the symmetry axis
+  double tip_distance = defaults::kTipDistance;  ///< h [m], distance from the tip P to the centre of mass G
+  double gravity = defaults::kGravity;  ///< g [m/s^2]
+  double friction = defaults::kFriction;  ///< k [N s/m], viscous friction F = -k v_P (viscous scene)
 
   /// A0 = A + m h^2: transverse moment about the tip (parallel-axis theorem).
   double inertia_about_tip() const { return inertia_transverse + mass * tip_distance * tip_distance; }
 };
 
 /// Initial state in z-x-z Euler angles (Goldstein): q0 = Rz(heading) Rx(tilt) Rz(spin_angle).
+/// Defaults: defaults.def (the toy top's start, tilted and spinning), as the key table's: a state
+/// upright or at rest sets its tilt and spin.
 struct InitialConditions {
-  double tilt = 0.0;             ///< theta0 [rad], angle of the axis from the vertical
-  double precession_rate = 0.0;  ///< phidot0 [rad/s]
-  double nutation_rate = 0.0;    ///< thetadot0 [rad/s]
-  double spin = 0.0;             ///< omega_Z [rad/s], body rate about the axis (constant of motion)
-  double heading = 0.0;          ///< phi0 [rad]
-  double spin_angle = 0.0;       ///< psi0 [rad]
-  double velocity_x = 0.0;       ///< G's horizontal velocity [m/s] (viscous scene only)
-  double velocity_y = 0.0;       ///< G's horizontal velocity [m/s] (viscous scene only)
+  double tilt = defaults::kTilt;  ///< theta0 [rad], angle of the axis from the vertical
+  double precession_rate = defaults::kPrecessionRate;  ///< phidot0 [rad/s]
+  double nutation_rate = defaults::kNutationRate;  ///< thetadot0 [rad/s]
+  double spin = defaults::kSpin;  ///< omega_Z [rad/s], body rate about the axis (constant of motion)
+  double heading = defaults::kHeading;  ///< phi0 [rad]
+  double spin_angle = defaults::kSpinAngle;  ///< psi0 [rad]
+  double velocity_x = defaults::kVelocityX;  ///< G's horizontal velocity [m/s] (viscous scene only)
+  double velocity_y = defaults::kVelocityY;  ///< G's horizontal velocity [m/s] (viscous scene only)
 };
 
 /// Thrown for a parameter that cannot describe a physical top. parameter() is the

@@ -31,16 +31,19 @@ SceneType parse_scene(const std::string& name);
 /// throws InvalidParameter("integrator", ...).
 IntegratorType parse_integrator(const std::string& name);
 
+/// Defaults: step and tolerance from defaults.def; `type` here (the key table shows its name as the
+/// `integrator` key's default).
 struct IntegratorSettings {
   IntegratorType type = IntegratorType::kAuto;
-  double step = 1e-3;        ///< fixed-step methods: largest substep [s]
-  double tolerance = 1e-12;  ///< adaptive methods: relative and absolute local error tolerance
+  double step = defaults::kStep;            ///< fixed-step methods: largest substep [s]
+  double tolerance = defaults::kTolerance;  ///< adaptive methods: relative and absolute local error tolerance
 };
 
 /// Throws InvalidParameter unless step and tolerance are positive and finite (and the
 /// tolerance is not below what double precision can meet).
 void validate(const IntegratorSettings& settings);
 
+/// Defaults: its parts'; `scene` here (the key table shows its name as the `scene` key's default).
 struct SceneConfig {
   SceneType scene = SceneType::kFixedTip;
   TopParameters top;
@@ -83,15 +86,14 @@ struct AutoPlan {
 /// this tolerance, or at the configured one if that is smaller.
 constexpr double kAutoFallbackTolerance = 1e-12;
 
-/// auto's rule:
-///   fixed_tip, frictionless -> exact (the closed form: round-off accuracy, no step), falling back
-///     to dop853 at min(tolerance, kAutoFallbackTolerance) for a state exact refuses;
-///   viscous -> radau5 at tolerance/100 (min 1e-14) when friction is stiff against the motion
-///     (lambda = k (1/m + h^2/A) > 100 times the fastest motion's rate: dop853's step would then
-///     be bounded by its stability, not its accuracy; the measured cost crossover), else dop853
-///     at tolerance/10 (min 1e-14) (doc/integrators.md, "Viscous: the default").
-/// Fixed-step choices run at min(step, largest_fixed_step / 2): auto is never refused a step.
+/// auto's rule: auto_rule_summary() states it, built from the constants auto_plan() runs on
+/// (kAutoFallbackTolerance and simulator.cpp's); why each: simulator.cpp and doc/integrators.md
+/// ("The auto rule", "Viscous: the default").
 AutoPlan auto_plan(const SceneConfig& config);
+
+/// auto's rule in one line, the one that the help texts show (the integrator registry's auto
+/// row, and through it `simulate --help`).
+std::string auto_rule_summary();
 
 /// The integrators auto_plan() chooses among, as first choices or fallbacks: auto's driver
 /// (auto_driver.hpp) holds the drivers of those that serve its scene, and no other.

@@ -45,7 +45,11 @@ def simulator_from_file(path, overrides=None):
     return Simulator(load_scene(path, overrides), require_all=True)
 
 
-def run_case(keys, duration=10.0, sample_rate=1000.0, max_steps=1e8):
+_DEFAULT_SETTINGS = CaseSettings()  # the core's
+
+
+def run_case(keys, duration=_DEFAULT_SETTINGS.duration, sample_rate=_DEFAULT_SETTINGS.sample_rate,
+             max_steps=_DEFAULT_SETTINGS.max_steps):
     """Runs one configuration to `duration` or its first event; returns the row as a dict.
 
     outcome is 'none' (ran to the end), an event ('lift_off', 'fallen', 'energy_drift',

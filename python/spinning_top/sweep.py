@@ -26,22 +26,12 @@ import numpy as np
 
 from spinning_top import _core
 
-#: The columns each case adds to its row, after the varied keys.
-OUTCOME_COLUMNS = {
-    "outcome": "none (ran to the duration), lift_off, fallen, energy_drift, non_finite, out_of_steps, refused",
-    "event_time": "[s] time of the event, empty if none",
-    "end_time": "[s] the duration, the event's time, or where max_steps ran out",
-    "min_normal_force": "[N] least R over the run (exact: closed form; time-steppers: the samples)",
-    "max_tilt": "[rad] largest angle of the axis from the vertical (likewise)",
-    "final_tilt": "[rad] at end_time",
-    "final_energy": "[J] E at end_time",
-    "friction_work": "[J] work done against friction by end_time (viscous)",
-    "energy_balance_error": "max |B - B0| / (|B0| + m g h), B = E - C wZ^2/2 + W (exact: at the end)",
-    "method": "the integrator that ran (auto's choice)",
-    "fallback": "auto ran its fallback (exact refused the state)",
-    "steps": "integration steps taken (exact: requests)",
-    "message": "why the core refused the case (outcome refused)",
-}
+#: The columns each case adds to its row, after the varied keys: name -> what it holds (the unit
+#: first), in order. The core's run_cases writes them (its one list of them).
+OUTCOME_COLUMNS = dict(_core.outcome_columns())
+
+#: A case's settings unless told otherwise: the core's (CaseSettings).
+DEFAULT_SETTINGS = _core.CaseSettings()
 
 #: Cases per batch at most: ~0.1 s of fixed-tip work, small against a Dask task's ~1 ms cost.
 MAX_BATCH = 4096
@@ -124,8 +114,8 @@ def _client(scheduler):
     return scheduler if isinstance(scheduler, Client) else Client(scheduler)
 
 
-def run(base, cases, duration=10.0, sample_rate=1000.0, max_steps=1e8, scheduler=None, workers=None,
-        batch_size=None, progress=False):
+def run(base, cases, duration=DEFAULT_SETTINGS.duration, sample_rate=DEFAULT_SETTINGS.sample_rate,
+        max_steps=DEFAULT_SETTINGS.max_steps, scheduler=None, workers=None, batch_size=None, progress=False):
     """Runs every case; returns a pandas DataFrame, one row per case in the design's order.
 
     base: the keys every case shares (e.g. load_scene(...)); cases: design(...). The base with
@@ -238,10 +228,13 @@ def main(argv=None):
     parser.add_argument("--design", choices=["grid", "random", "sobol"], default="grid")
     parser.add_argument("--cases", type=int, help="number of cases of a random or sobol design")
     parser.add_argument("--seed", type=int, default=0, help="seed of a random or sobol design (default 0)")
-    parser.add_argument("--duration", type=float, default=10.0, help="[s] each case runs to it or its first event")
-    parser.add_argument("--sample-rate", type=float, default=1000.0,
-                        help="[Hz] samples of a time-stepper's case for its extremes (default 1000; exact needs none)")
-    parser.add_argument("--max-steps", type=float, default=1e8, help="integration steps a case may take (default 1e8)")
+    parser.add_argument("--duration", type=float, default=DEFAULT_SETTINGS.duration,
+                        help="[s] each case runs to it or its first event (default %(default)g)")
+    parser.add_argument("--sample-rate", type=float, default=DEFAULT_SETTINGS.sample_rate,
+                        help="[Hz] samples of a time-stepper's case for its extremes (default %(default)g; exact needs "
+                             "none)")
+    parser.add_argument("--max-steps", type=float, default=DEFAULT_SETTINGS.max_steps,
+                        help="integration steps a case may take (default %(default)g)")
     parser.add_argument("--output", help="rows as .csv or .parquet (default: CSV on stdout)")
     parser.add_argument("--plot", help="stability map as PNG (outcome and event time over --x and --y)")
     parser.add_argument("--value", default="event_time",

@@ -66,7 +66,7 @@ ParameterMap read_scene_parameters(const ros::NodeHandle& private_nh) {
   for (const ParameterSpec& spec : parameter_specs()) {
     XmlRpc::XmlRpcValue value;
     if (!private_nh.getParam(spec.key, value)) continue;
-    const bool is_text = !is_number(spec.default_value);  // scene, integrator: names
+    const bool is_text = !is_number(spec.default_value.c_str());  // scene, integrator: names
     switch (value.getType()) {
       case XmlRpc::XmlRpcValue::TypeDouble:
         if (!is_text) { values[spec.key] = number_text(static_cast<double>(value)); continue; }

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdio>
 
+#include "spinning_top/ros/live_keys.hpp"
 #include "spinning_top/ros/ros_parameters.hpp"
 #include "spinning_top/scene_file.hpp"
 
@@ -16,8 +17,6 @@ namespace ros_front_end {
 namespace {
 
 constexpr double kAsFastAsPossibleSlice = 1e-3;  // [s] wall time per timer callback when rtf = 0
-// dynamic_reconfigure's live omega_Z (not a scene key: the scene's is initial/spin).
-constexpr const char* kSpinKey = "spin";
 
 std::string format(const char* pattern, double value) {
   char buffer[160];
@@ -41,7 +40,7 @@ long ticks_per(double rate, double publication_rate) {
 void warn_about_unknown_keys(const ros::NodeHandle& private_nh, const std::vector<std::string>& top_names) {
   std::vector<std::string> known = parameter_keys();
   for (const std::string& key : node_setting_keys()) known.push_back(key);
-  known.push_back(kSpinKey);
+  for (const LiveKey& key : live_keys()) known.push_back(key.name);  // e.g. spin (the scene's: initial/spin)
   known.push_back("robot_description");  // the node writes it (a URDF of the top)
   for (const std::string& name : top_names) {
     for (const std::string& key : parameter_keys()) known.push_back(name + "/" + key);
@@ -93,18 +92,9 @@ SpinningTopNode::SpinningTopNode(ros::NodeHandle nh, ros::NodeHandle private_nh)
   // dynamic_reconfigure starts from what is on the parameter server: put the effective
   // values there (the scene's documented defaults included), so its first callback
   // changes nothing. With several tops, the first one's.
-  const SceneConfig& first = configs.front().second;
-  private_nh_.setParam("friction", first.top.friction);
-  private_nh_.setParam("gravity", first.top.gravity);
-  private_nh_.setParam("tolerance", first.integrator.tolerance);
-  private_nh_.setParam("step", first.integrator.step);
-  private_nh_.setParam("mass", first.top.mass);
-  private_nh_.setParam("inertia_transverse", first.top.inertia_transverse);
-  private_nh_.setParam("inertia_axial", first.top.inertia_axial);
-  private_nh_.setParam("tip_distance", first.top.tip_distance);
-  private_nh_.setParam(kSpinKey, first.initial.spin);
-  private_nh_.setParam("rate", settings_.rate);
-  private_nh_.setParam("real_time_factor", settings_.real_time_factor);
+  SceneConfig first = configs.front().second;
+  for (const LiveKey& key : live_keys())
+    private_nh_.setParam(key.name, key.in_top != nullptr ? *key.in_top(first) : *key.in_node(settings_));
 
   // A /clock subscriber (every sim-time node) may fall behind by a few callbacks at 1 kHz.
   if (settings_.publish_clock) clock_publisher_ = nh_.advertise<rosgraph_msgs::Clock>("/clock", 100);
@@ -411,35 +401,18 @@ void SpinningTopNode::reconfigure(SpinningTopConfig& config, uint32_t /*level*/)
     return refuse(error.what());
   }
   const SpinningTopConfig& old = applied_config_;
-  const bool step_changed = config.friction != old.friction || config.gravity != old.gravity ||
-                            config.tolerance != old.tolerance || config.step != old.step;
-  const bool body_changed = config.mass != old.mass || config.inertia_transverse != old.inertia_transverse ||
-                            config.inertia_axial != old.inertia_axial || config.tip_distance != old.tip_distance ||
-                            config.spin != old.spin;
+  const std::uint32_t changed = changed_levels(config, old);
+  const bool step_changed = (changed & (kModel | kIntegrator)) != 0;
+  const bool body_changed = (changed & kBody) != 0;
   // Only what changed applies, to every top (tops spawned with another body keep theirs).
-  auto changed_top = [&](const TopParameters& current) {
-    TopParameters top = current;
-    if (config.friction != old.friction) top.friction = config.friction;
-    if (config.gravity != old.gravity) top.gravity = config.gravity;
-    if (config.mass != old.mass) top.mass = config.mass;
-    if (config.inertia_transverse != old.inertia_transverse) top.inertia_transverse = config.inertia_transverse;
-    if (config.inertia_axial != old.inertia_axial) top.inertia_axial = config.inertia_axial;
-    if (config.tip_distance != old.tip_distance) top.tip_distance = config.tip_distance;
-    return top;
-  };
-  auto changed_integrator = [&](const IntegratorSettings& current) {
-    IntegratorSettings integrator = current;
-    if (config.tolerance != old.tolerance) integrator.tolerance = config.tolerance;
-    if (config.step != old.step) integrator.step = config.step;
-    return integrator;
-  };
   if (step_changed || body_changed) {
     // Every top is checked before any changes, so that a refusal leaves all of them as they were.
     for (const auto& top : tops_) {
+      // Its start with its current body and integrator, and the changes (the spin's included).
       SceneConfig candidate = top->start_config();
-      candidate.top = changed_top(top->simulator().config().top);
-      candidate.integrator = changed_integrator(top->simulator().config().integrator);
-      if (config.spin != old.spin) candidate.initial.spin = config.spin;
+      candidate.top = top->simulator().config().top;
+      candidate.integrator = top->simulator().config().integrator;
+      candidate = with_changes(candidate, config, old);
       try {
         validate(candidate);
         if (body_changed && top->event() != Event::kNone)
@@ -452,8 +425,9 @@ void SpinningTopNode::reconfigure(SpinningTopConfig& config, uint32_t /*level*/)
     }
     for (const auto& top : tops_) {
       try {
-        const TopParameters new_top = changed_top(top->simulator().config().top);
-        const IntegratorSettings new_integrator = changed_integrator(top->simulator().config().integrator);
+        const SceneConfig changed_config = with_changes(top->simulator().config(), config, old);
+        const TopParameters& new_top = changed_config.top;
+        const IntegratorSettings& new_integrator = changed_config.integrator;
         if (body_changed) {
           const double spin = config.spin != old.spin ? config.spin : top->snapshot().body_rates.z();
           top->update(top->simulator().config().top, new_integrator);
@@ -471,22 +445,23 @@ void SpinningTopNode::reconfigure(SpinningTopConfig& config, uint32_t /*level*/)
     }
     send_static_transforms();
   }
-  if (config.rate != settings_.rate || config.real_time_factor != settings_.real_time_factor) {
+  bool pacing_changed = false;
+  for (const LiveKey& key : live_keys()) {
+    if (key.in_node == nullptr || *key.in_node(settings_) == config.*key.field) continue;
+    *key.in_node(settings_) = config.*key.field;
+    pacing_changed = true;
+  }
+  if (pacing_changed) {
     // Re-anchor so that the next tick is exactly one new period after the last one.
-    settings_.rate = config.rate;
-    settings_.real_time_factor = config.real_time_factor;
     clock_.set_pace(settings_.rate, settings_.real_time_factor, ros::WallTime::now().toSec());
     restart_timer();
   }
   applied_config_ = config;
-  char summary[400];
-  std::snprintf(summary, sizeof summary,
-                "applied: k %g N s/m, g %g m/s^2, m %g kg, A %g, C %g kg m^2, h %g m, spin %g rad/s, %g Hz, "
-                "real-time factor %g",
-                config.friction, config.gravity, config.mass, config.inertia_transverse, config.inertia_axial,
-                config.tip_distance, config.spin, config.rate, config.real_time_factor);
+  std::string summary;  // "applied: friction 0, gravity 9.80665, ...", every live key
+  for (const LiveKey& key : live_keys())
+    summary += (summary.empty() ? "applied: " : ", ") + std::string(key.name) + " " + format("%g", config.*key.field);
   report(summary);
-  ROS_INFO("spinning_top: %s", summary);
+  ROS_INFO("spinning_top: %s", summary.c_str());
 }
 
 bool SpinningTopNode::on_reset(std_srvs::Trigger::Request& request, std_srvs::Trigger::Response& response) {

@@ -12,6 +12,7 @@
 #include "spinning_top/TopState.h"
 #include "spinning_top/kinematics.hpp"
 #include "spinning_top/ros/conversions.hpp"
+#include "spinning_top/ros/live_keys.hpp"
 #include "spinning_top/ros/markers.hpp"
 
 namespace spinning_top {
@@ -104,8 +105,12 @@ void TopInstance::reset(double world_time) { restart(start_config_, start_tip_xy
 bool TopInstance::update(const TopParameters& top, const IntegratorSettings& integrator) {
   const bool switched = simulator_->update(top, integrator);  // validates; changes nothing if it throws
   now_ = simulator_->snapshot();  // a new g or k changes R and the floor force of the same state
-  start_config_.top.friction = top.friction;
-  start_config_.top.gravity = top.gravity;
+  // ~reset starts again with what the update changed: the model's live keys (level kModel of
+  // live_keys.def) and the integrator settings.
+  SceneConfig updated = start_config_;
+  updated.top = top;
+  for (const LiveKey& key : live_keys())
+    if (key.level == kModel && key.in_top != nullptr) *key.in_top(start_config_) = *key.in_top(updated);
   start_config_.integrator = integrator;
   rebaseline_energy();
   return switched;

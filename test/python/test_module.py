@@ -88,6 +88,20 @@ def test_scene_file_errors_are_reported(tmp_path):
         st.read_scene_file(str(bad))
 
 
+def test_run_has_the_snapshots_fields_at_each_time():
+    # Simulator.run's columns and Simulator.snapshot()'s keys are one list of a state's fields (the
+    # snapshot adds L_z): the run's last row is the snapshot after it, bit for bit.
+    keys = {"scene": "viscous", "friction": 0.05, "initial/velocity_x": 0.1}
+    trajectory = st.Simulator(keys).run(np.linspace(0.0, 0.5, 11))
+    sim = st.Simulator(keys)
+    sim.advance_to(0.5)
+    snapshot = sim.snapshot()
+    assert [key for key in trajectory if key != "event"] == [key for key in snapshot if key != "vertical_angular_momentum"]
+    for key, column in trajectory.items():
+        if key != "event":
+            np.testing.assert_array_equal(column[-1], snapshot[key])
+
+
 def test_step_budget_stops_a_run():
     sim = st.Simulator({"scene": "fixed_tip", "initial/tilt": 0.3, "initial/spin": 150, "integrator": "rk4",
                         "step": 1e-5})

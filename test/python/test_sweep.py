@@ -26,6 +26,16 @@ def test_random_designs_are_reproducible_and_in_bounds(kind):
     assert a["initial/spin"].min() >= 10 and a["initial/spin"].max() < 20
 
 
+def test_outcome_columns_are_run_cases_columns_in_order():
+    # One list (the core's): what run_cases returns, a refused case's row included, and what the
+    # sweep's rows and descriptions name.
+    columns = st.run_cases({"scene": "fixed_tip"}, {"initial/spin": np.array([150.0, 2e9])}, st.CaseSettings(0.1))
+    assert list(columns) == list(sweep.OUTCOME_COLUMNS)
+    assert list(columns["outcome"]) == ["none", "refused"]
+    assert all(len(columns[name]) == 2 for name in columns)
+    assert all(description for description in sweep.OUTCOME_COLUMNS.values())
+
+
 def test_rows_equal_single_runs_whatever_the_batching():
     base = {"scene": "fixed_tip", "initial/precession_rate": 0.0}
     cases = sweep.design({"initial/spin": (0, 200, 9), "initial/tilt": (0, 1.4, 5)})

@@ -49,7 +49,8 @@ using FixedStepDriver = Driver<Model, OneStepStepper<Model, Method>, SubstepPlan
 template <class Model, class Method>
 using AdaptiveDriver = Driver<Model, EmbeddedStepper<Model, Method>, typename Method::Controller>;
 
-/// One row per IntegratorType: kName, kScenes, kStepLimit, kHelp, kSceneNote and Driver<Model>.
+/// One row per IntegratorType: kName, kScenes, kStepLimit, kHelp (auto's: auto_rule_summary()),
+/// kSceneNote and Driver<Model>.
 template <IntegratorType type>
 struct Integrator;
 
@@ -62,11 +63,7 @@ struct Integrator<IntegratorType::kAuto> {
   static constexpr const char* kName = "auto";
   static constexpr unsigned kScenes = kAllScenes;
   static constexpr StepLimit kStepLimit = StepLimit::kNone;
-  static constexpr const char* kHelp =
-      "exact for fixed_tip and frictionless, dop853 (tolerance 1e-12) for a state exact refuses; viscous: radau5 "
-      "(tolerance/100) when friction relaxes the slip 100x faster than the fastest motion, k (1/m + h^2/A) > 100 "
-      "max(C |omega_Z|/A', sqrt(m g h/A'), |omega|/2), dop853 (tolerance/10) otherwise; chooses again at reset and live updates, and "
-      "says what it runs and why";
+  // Its help line is auto_rule_summary() (src/integrator_registry.cpp), built from auto_plan()'s constants.
   static constexpr const char* kSceneNote = "";
   template <class Model>
   using Driver = AutoDriver<Model>;

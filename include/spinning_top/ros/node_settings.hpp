@@ -7,12 +7,14 @@
 #include <string>
 #include <vector>
 
+#include "spinning_top/defaults.hpp"
+
 namespace spinning_top {
 namespace ros_front_end {
 
 struct NodeSettings {
-  double rate = 1000.0;             ///< ticks per simulated second [Hz]
-  double real_time_factor = 1.0;    ///< simulated s per wall s; 0 = as fast as possible
+  double rate = defaults::kRate;  ///< ticks per simulated second [Hz]
+  double real_time_factor = defaults::kRealTimeFactor;  ///< simulated s per wall s; 0 = as fast as possible
   /// [wall s] missed ticks are taken late (catch-up) up to this lag; beyond it they are given
   /// up (reported), so that an overloaded machine does not fall ever further behind
   double max_lag = 1.0;

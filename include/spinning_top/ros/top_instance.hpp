@@ -54,7 +54,8 @@ class TopInstance {
   void reset(double world_time);
   /// A new start (set_state, reload): validated first; throws InvalidParameter and changes nothing.
   void restart(const SceneConfig& config, const Eigen::Vector2d& tip_xy, double world_time);
-  /// Live changes of k, g and the integrator settings, keeping the state (Simulator::update).
+  /// Live changes of the model (the live keys of level kModel, live_keys.def) and of the
+  /// integrator settings, keeping the state (Simulator::update).
   /// Throws InvalidParameter and changes nothing; returns true if auto switched its method.
   bool update(const TopParameters& top, const IntegratorSettings& integrator);
   /// Live changes of the body (m, A, C, h) and of the spin omega_Z, from the current state: the
