@@ -46,6 +46,7 @@ template <class Stepper, class Controller, class Setting>
 void expect_bounces(const Setting& setting, double time_tolerance, double tilt_tolerance, const char* what) {
   InitialConditions ic;
   ic.tilt = kRelease;
+  ic.spin = 0.0;
   const FixedTip model(toy_top(), ic);
   std::vector<double> landings;
   Driver<FixedTip, Stepper, Controller, ElasticFloor> driver(setting, ElasticFloor{&landings});
@@ -106,6 +107,7 @@ TEST(EventHandling, TheClosedFormRestartsFromEachLanding) {
 TEST(EventHandling, WithoutAHandlerTheRunEndsAtTheFirstLanding) {
   InitialConditions ic;
   ic.tilt = kRelease;
+  ic.spin = 0.0;
   const FixedTip model(toy_top(), ic);
   AdaptiveDriver<FixedTip, DormandPrince853<FixedTip>> driver(1e-12);
   driver.reset(model, 0.0, model.initial_state());
