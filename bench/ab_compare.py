@@ -4,7 +4,7 @@ interleaved (A, B, A, B, ...) so that both see the same load, as ratios B / A.
 
 Runs `work_precision --quick` (every integrator's work-precision points and the default's state
 every 1 ms) and `node_load.py --quick` (the node at 1 kHz and as fast as possible) for each build,
-`--rounds` times each, and reports the median ratio per method and overall. A ratio of 1.00 is
+`--rounds` times each (in the order A, B, B, A, A, B, ...), and reports the median ratio per method and overall. A ratio of 1.00 is
 no change; the spread between rounds of the same build says what counts as measurable.
 
 Usage: ab_compare.py OLD_DEVEL_LIB NEW_DEVEL_LIB OUTPUT.md [--rounds N] [--no-node]
@@ -25,6 +25,7 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 
 
 def run_work_precision(lib, out_dir):
+    os.makedirs(out_dir, exist_ok=True)
     env = dict(os.environ, LD_LIBRARY_PATH=lib)
     subprocess.run([os.path.join(lib, "spinning_top", "work_precision"), "--quick", "--output-dir", out_dir], env=env,
                    stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, check=True)
@@ -41,6 +42,7 @@ def run_work_precision(lib, out_dir):
 
 
 def run_node_load(lib, out_dir):
+    os.makedirs(out_dir, exist_ok=True)
     env = dict(os.environ, LD_LIBRARY_PATH=lib, SPINNING_TOP_NODE=os.path.join(lib, "spinning_top", "spinning_top_node"))
     subprocess.run(["/usr/bin/python3", os.path.join(HERE, "node_load.py"), out_dir, "--quick"], env=env,
                    stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, check=True)
@@ -58,12 +60,15 @@ def main(argv):
         print(__doc__, file=sys.stderr)
         return 2
     old, new, output = (os.path.abspath(a) for a in argv[1:4])
-    rounds = int(argv[argv.index("--rounds") + 1]) if "--rounds" in argv else 2
+    rounds = int(argv[argv.index("--rounds") + 1]) if "--rounds" in argv else 4
     with_node = "--no-node" not in argv
     samples = {"old": defaultdict(list), "new": defaultdict(list)}
     with tempfile.TemporaryDirectory() as tmp:
         for k in range(rounds):
-            for label, lib in (("old", old), ("new", new)):
+            # ABBA: the order alternates, so that a drift of the machine over the run (load,
+            # frequency) does not favour the build that runs first.
+            order = (("old", old), ("new", new)) if k % 2 == 0 else (("new", new), ("old", old))
+            for label, lib in order:
                 print(f"round {k + 1}/{rounds}: {label}", flush=True)
                 for key, value in run_work_precision(lib, os.path.join(tmp, f"{label}{k}")).items():
                     samples[label][key].append(value)
@@ -83,7 +88,7 @@ def main(argv):
                 if len(values) > 1 and min(values) > 0:
                     spread[group].append(max(values) / min(values))
     lines = [f"Before ({old}) against after ({new}): CPU of after / before, medians over {rounds} interleaved "
-             "rounds; per group the median over its points and the range of those ratios; 'noise' is the median "
+             "rounds (ABBA order); per group the median over its points and the range of those ratios; 'noise' is the median "
              "max/min of one build's own rounds.", "",
              "| benchmark | method or case | points | ratio after / before (median) | range | noise |",
              "|---|---|---|---|---|---|"]
