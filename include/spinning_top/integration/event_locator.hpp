@@ -12,14 +12,6 @@
 #include "spinning_top/events.hpp"
 #include "spinning_top/hot_path.hpp"
 
-// The search inside a step runs only in the few steps the screen cannot clear: kept out of line
-// so that the flattened per-step code (hot_path.hpp) does not carry it.
-#if defined(__GNUC__) || defined(__clang__)
-#define SPINNING_TOP_NOINLINE __attribute__((noinline))
-#else
-#define SPINNING_TOP_NOINLINE
-#endif
-
 namespace spinning_top {
 
 /// The event locator of the stepping methods: after each accepted step (projected and guarded by
@@ -120,6 +112,8 @@ class EventLocator {
   };
 
   /// Steps 2 and 3 of the class comment for the screened functions; the earliest event wins.
+  /// It runs only in the few steps the screen cannot clear: kept out of line (hot_path.hpp), so
+  /// that the flattened per-step code does not carry it.
   template <class StateAt>
   SPINNING_TOP_NOINLINE Outcome search_step(const Model& model, const State& y_start, double t_end,
                                                 const Eigen::Vector2d& g_end, const EventCubic (&cubic)[2],

@@ -66,8 +66,9 @@ class ReducedGauss6 {
 
   /// Solves the collocation equations K_i = f(u0 + dt sum_j a_ij K_j) by fixed-point
   /// iteration (the problem is not stiff: contraction ~ dt |omega| / 2 per sweep).
-  /// Flattened (hot_path.hpp): rate() and its attitude_rate() were left as calls.
-  SPINNING_TOP_FLATTEN bool collocate(const Model& model, State& y, double dt) const {
+  /// Flattened (hot_path.hpp): rate() and its attitude_rate() were left as calls. Out of line
+  /// (hot_path.hpp), as it was before the one driver loop flattened its step.
+  SPINNING_TOP_FLATTEN SPINNING_TOP_NOINLINE bool collocate(const Model& model, State& y, double dt) const {
     const double spin = model.spin();
     Reduced u0;
     u0.template head<4>() = y.template head<4>();
