@@ -4,11 +4,8 @@
 #pragma once
 
 #include <algorithm>
-#include <array>
 #include <cmath>
-#include <complex>
 #include <cstdio>
-#include <limits>
 #include <optional>
 #include <string>
 
@@ -27,7 +24,6 @@ class ExactStepper {
  public:
   using State = typename Model::State;
   using Solution = ExactSolution<Model>;
-  using Complex = exact_detail::Complex;
   static constexpr bool kFsal = false, kInterpolatedAnswers = false, kClosedForm = true;
   static constexpr const char* kName = "exact";
 
