@@ -22,6 +22,9 @@ SampledRun sample_run(Simulator& simulator, long long count, const std::function
   for (long long i = 0; i < count && (i == 0 || run.event == Event::kNone); ++i) {
     const double t = time_at(i);
     run.event = simulator.advance_to(t, WorkBudget::steps_left(max_steps, simulator.steps()));
+    // The transitions passed on the way (hybrid model), each a sample at its own time.
+    for (const Transition& transition : simulator.take_transitions())
+      sample(transition.state.time, transition.state, transition.event);
     if (run.event == Event::kNone && simulator.time() < t) {
       run.out_of_steps = true;
       if (steps_run_out == StateWhereStepsRunOut::kKeep) sample(simulator.time(), simulator.snapshot(), run.event);
@@ -51,8 +54,20 @@ double tilt_of(const Quaternion& q) {
   return 2.0 * std::atan2(std::hypot(q.x(), q.y()), std::hypot(q.w(), q.z()));
 }
 
+namespace {
+CaseOutcome run_case_with(const SceneConfig& config, const CaseSettings& settings, bool allow_closed_form);
+CaseOutcome run_case_sampled(const SceneConfig& config, const CaseSettings& settings) {
+  return run_case_with(config, settings, false);
+}
+}  // namespace
+
 CaseOutcome run_case(const SceneConfig& config, const CaseSettings& settings) {
   validate(settings);
+  return run_case_with(config, settings, true);
+}
+
+namespace {
+CaseOutcome run_case_with(const SceneConfig& config, const CaseSettings& settings, bool allow_closed_form) {
   const std::unique_ptr<Simulator> simulator = make_simulator(config);
   const TopParameters& top = config.top;
   const double axial = top.inertia_axial;
@@ -75,7 +90,7 @@ CaseOutcome run_case(const SceneConfig& config, const CaseSettings& settings) {
   // The start, then: closed form (exact), one request to the end, and the extremes over the whole
   // run from the method, exact where samples would miss a peak between them; a time-stepper, the
   // samples. The state where the steps ran out is the case's end.
-  const bool closed_form = simulator->motion_range().has_value();
+  const bool closed_form = allow_closed_form && simulator->motion_range().has_value();
   const SampleTimes times(settings.duration, settings.sample_rate);
   const SampledRun run =
       closed_form ? sample_run(*simulator, 2, [&](long long i) { return i == 0 ? 0.0 : settings.duration; },
@@ -89,6 +104,12 @@ CaseOutcome run_case(const SceneConfig& config, const CaseSettings& settings) {
       outcome.max_tilt = std::max(outcome.max_tilt, range->max_tilt);
     }
   }
+  if (closed_form && simulator->hops().lift_offs > 0) {
+    // The tip left the floor: the extremes of a closed form's contact phase no longer cover the
+    // run. Run the case again, sampled as a time-stepper's (the hops' own figures are exact).
+    CaseSettings sampled = settings;
+    return run_case_sampled(config, sampled);
+  }
   outcome.event = run.event;
   outcome.out_of_steps = run.out_of_steps;
   outcome.end_time = simulator->time();
@@ -100,7 +121,14 @@ CaseOutcome run_case(const SceneConfig& config, const CaseSettings& settings) {
   outcome.method = choice.method;
   outcome.fallback = choice.fallback;
   outcome.steps = simulator->steps();
+  const HopSummary hops = simulator->hops();
+  outcome.lift_offs = hops.lift_offs;
+  outcome.landings = hops.landings;
+  outcome.first_lift_off_time = hops.first_lift_off_time;
+  outcome.max_hop_height = hops.max_hop_height;
   return outcome;
 }
+
+}  // namespace
 
 }  // namespace spinning_top

@@ -48,6 +48,15 @@ const std::vector<ParameterSpec>& parameter_specs() {
       numeric("tip_distance", "m", true, "h, distance from the tip to the centre of mass G"),
       numeric("gravity", "m/s^2", false, "g, gravitational acceleration"),
       numeric("friction", "N s/m", false, "k, viscous friction F = -k v_P on the tip (viscous scene only)"),
+      numeric("rim_radius", "m", false,
+              "b, radius of the body's rim, a circle about the axis: the top has fallen when it touches the "
+              "floor (0: a needle, fallen when the axis reaches the floor)"),
+      numeric("rim_distance", "m", false, "a, distance of the rim's centre from the tip along the axis (> 0 when b > 0)"),
+      {"after_lift_off", "", to_string(SceneConfig{}.after_lift_off), false,
+       "where the tip would leave the floor: fly (flight, landing, skim: doc/spec/HYBRID.md) | stop (the run ends "
+       "with lift_off)"},
+      numeric("restitution", "", false, "e in [0, 1), landing: the tip's vertical velocity after = -e x before"),
+      numeric("restitution_speed", "m/s", false, "landings slower than this are plastic (e = 0)"),
       numeric("initial/tilt", "rad", true, "theta0, initial angle of the axis from the vertical (|theta0| < pi/2)"),
       numeric("initial/precession_rate", "rad/s", false, "phidot0, initial precession rate"),
       numeric("initial/nutation_rate", "rad/s", false, "thetadot0, initial nutation rate"),
@@ -140,6 +149,11 @@ SceneConfig parse_scene_config(const ParameterMap& values, bool require_all) {
   config.top.tip_distance = number("tip_distance");
   config.top.gravity = number("gravity");
   config.top.friction = number("friction");
+  config.top.rim_radius = number("rim_radius");
+  config.top.rim_distance = number("rim_distance");
+  config.top.restitution = number("restitution");
+  config.top.restitution_speed = number("restitution_speed");
+  config.after_lift_off = parse_after_lift_off(string("after_lift_off"));
   config.initial.tilt = number("initial/tilt");
   config.initial.precession_rate = number("initial/precession_rate");
   config.initial.nutation_rate = number("initial/nutation_rate");

@@ -36,6 +36,15 @@ void validate(const TopParameters& p) {
   require_non_negative("tip_distance", p.tip_distance, "the tip distance h [m]");
   require_non_negative("gravity", p.gravity, "the gravitational acceleration g [m/s^2]");
   require_non_negative("friction", p.friction, "the friction coefficient k [N s/m]");
+  require_non_negative("rim_radius", p.rim_radius, "the rim radius b [m]");
+  require_non_negative("rim_distance", p.rim_distance, "the rim distance a [m]");
+  if (p.rim_radius > 0.0 && !(p.rim_distance > 0.0))
+    throw InvalidParameter("rim_distance", "a rim of radius b > 0 needs a > 0 (with a = 0 the rim is around the tip: "
+                                           "the top would stand on it)");
+  require_non_negative("restitution", p.restitution, "the coefficient of restitution e");
+  if (!(p.restitution < 1.0))
+    throw InvalidParameter("restitution", "must be < 1 (e = 1 bounces for ever), got " + format(p.restitution));
+  require_non_negative("restitution_speed", p.restitution_speed, "the speed below which landings are plastic [m/s]");
   // A = integral of (y^2 + z^2) dm and C = integral of (x^2 + y^2) dm, so 2A - C = 2 integral z^2 dm >= 0.
   if (p.inertia_axial > 2.0 * p.inertia_transverse)
     throw InvalidParameter("inertia_axial", "C = " + format(p.inertia_axial) + " exceeds 2A = " +

@@ -12,6 +12,7 @@
 #include <stdexcept>
 #include <string>
 #include <utility>
+#include <vector>
 
 #include "scene_factories.hpp"
 #include "spinning_top/auto_driver.hpp"
@@ -31,9 +32,23 @@ Driver make_driver(const SceneConfig& config) {
     return Driver(config.integrator);
 }
 
-template <class Model, class Driver>
-class SceneSimulator final : public Simulator {
+/// A contact phase of the hybrid model (hybrid_simulator.hpp): a Simulator whose model and state
+/// the hybrid reads and restarts at a transition.
+template <class Model>
+class ContactPhase : public Simulator {
  public:
+  using State = typename Model::State;
+  virtual const State& state() const = 0;
+  virtual const Model& model() const = 0;
+  /// Goes on at (t, y) with `model` (the same top; skimming or not): its driver restarts there,
+  /// auto choosing again. Throws MethodRefusal where the configured closed form refuses y.
+  virtual void restart(const Model& model, double t, const State& y) = 0;
+};
+
+template <class Model, class Driver>
+class SceneSimulator final : public ContactPhase<Model> {
+ public:
+  using State = typename Model::State;
   static constexpr bool kAutomatic = Driver::kKind == IntegratorKind::kAutomatic;
 
   explicit SceneSimulator(const SceneConfig& config)
@@ -125,6 +140,21 @@ class SceneSimulator final : public Simulator {
       return {config_.integrator.type, config_.integrator.type, false, ""};
   }
   long steps() const override { return driver_.steps(); }
+  std::vector<Transition> take_transitions() override { return {}; }  // a contact phase alone has none
+  HopSummary hops() const override {
+    HopSummary summary;
+    if (driver_.event() == Event::kLiftOff) summary.first_lift_off_time = driver_.time();
+    return summary;
+  }
+  Phase phase() const override { return Phase::kContact; }
+
+  const State& state() const override { return driver_.state(); }
+  const Model& model() const override { return model_; }
+  void restart(const Model& model, double t, const State& y) override {
+    driver_.reset(model, t, y);  // may throw (MethodRefusal) before anything changes
+    model_ = model;
+    updated_ = true;
+  }
 
  private:
   /// A switch is another method, or the same method for another reason to run it (fallback).
@@ -142,7 +172,7 @@ class SceneSimulator final : public Simulator {
 /// The simulator for the integrator `type` on this scene, or null if the row does not serve it
 /// (validate() refuses that before).
 template <class Model, IntegratorType type>
-std::unique_ptr<Simulator> make_with(const SceneConfig& config) {
+std::unique_ptr<ContactPhase<Model>> make_with(const SceneConfig& config) {
   if constexpr (serves<type, Model>())
     return std::make_unique<SceneSimulator<Model, DriverFor<Model, type>>>(config);
   else
@@ -150,8 +180,9 @@ std::unique_ptr<Simulator> make_with(const SceneConfig& config) {
 }
 
 template <class Model, int... index>
-std::unique_ptr<Simulator> make_any(const SceneConfig& config, IntegratorType type, std::integer_sequence<int, index...>) {
-  std::unique_ptr<Simulator> simulator;
+std::unique_ptr<ContactPhase<Model>> make_any(const SceneConfig& config, IntegratorType type,
+                                             std::integer_sequence<int, index...>) {
+  std::unique_ptr<ContactPhase<Model>> simulator;
   ((type == static_cast<IntegratorType>(index) ? (simulator = make_with<Model, static_cast<IntegratorType>(index)>(config), true)
                                                 : false) ||
    ...);
@@ -160,9 +191,9 @@ std::unique_ptr<Simulator> make_any(const SceneConfig& config, IntegratorType ty
 
 /// Builds the scene's simulator for config.integrator (validated by the caller).
 template <class Model>
-std::unique_ptr<Simulator> make_scene_simulator(const SceneConfig& config) {
+std::unique_ptr<ContactPhase<Model>> make_contact_phase(const SceneConfig& config) {
   const IntegratorType type = config.integrator.type;
-  std::unique_ptr<Simulator> simulator =
+  std::unique_ptr<ContactPhase<Model>> simulator =
       make_any<Model>(config, type, std::make_integer_sequence<int, kIntegratorCount>());
   if (!simulator)
     throw InvalidParameter("integrator", std::string(to_string(type)) + " does not serve the " + Model::kName + " scene");

@@ -66,21 +66,23 @@ const CsvColumn kCsvColumns[] = {
     {"gx", "[m] G's position: x", [](double, const Snapshot& s) { return s.outputs.center_of_mass.x(); }},
     {"gy", "[m] y", [](double, const Snapshot& s) { return s.outputs.center_of_mass.y(); }},
     {"gz", "[m] z", [](double, const Snapshot& s) { return s.outputs.center_of_mass.z(); }},
-    {"px", "[m] the tip on the floor: x", [](double, const Snapshot& s) { return s.outputs.contact_point.x(); }},
+    {"px", "[m] the tip P: x", [](double, const Snapshot& s) { return s.outputs.contact_point.x(); }},
     {"py", "[m] y", [](double, const Snapshot& s) { return s.outputs.contact_point.y(); }},
+    {"pz", "[m] the tip's height above the floor (0 on it)", [](double, const Snapshot& s) { return s.outputs.contact_point.z(); }},
     {"normal_force", "[N] R, the floor's normal force", [](double, const Snapshot& s) { return s.outputs.normal_force; }},
     {"contact_force_x", "[N] the horizontal floor force on the tip (pivot reaction, friction, or 0): x",
      [](double, const Snapshot& s) { return s.outputs.contact_force.x(); }},
     {"contact_force_y", "[N] y", [](double, const Snapshot& s) { return s.outputs.contact_force.y(); }},
     {"energy", "[J] E", [](double, const Snapshot& s) { return s.outputs.energy; }},
 };
+constexpr const char* kPhaseColumn = "phase";
 constexpr const char* kEventColumn = "event";
 
-/// The CSV header: kCsvColumns' names, then the event column.
+/// The CSV header: kCsvColumns' names, then the text columns phase and event.
 std::string csv_header() {
   std::string header;
   for (const CsvColumn& column : kCsvColumns) header += std::string(column.name) + ",";
-  return header + kEventColumn;
+  return header + kPhaseColumn + "," + kEventColumn;
 }
 
 /// Bad input: reported on stderr with exit code 2 before anything is written.
@@ -200,8 +202,13 @@ void print_help(std::ostream& out) {
     out << column.description << "\n";
   }
   out << "  ";
+  pad(kPhaseColumn, column_width);
+  out << "contact | flight | skim (doc/spec/HYBRID.md)\n";
+  out << "  ";
   pad(kEventColumn, column_width);
-  out << "empty, or lift_off | fallen | non_finite on the last row, at the event time\n"
+  out << "empty; lift_off | take_off | landing on a transition's own row, at its time (the run\n"
+         "  goes on; with after_lift_off: stop, lift_off ends it); fallen | non_finite |\n"
+         "  energy_drift | lift_off on the last row when the run ends there\n"
          "\n"
          "Exit codes: 0 success (also when an event ends the run early), 1 runtime error\n"
          "(e.g. the output cannot be written), 2 bad input (nothing written), 3 the run needs\n"
@@ -309,7 +316,7 @@ SceneConfig read_scene(const Options& options) {
 
 void write_row(std::FILE* out, double t, const Snapshot& s, Event event) {
   for (const CsvColumn& column : kCsvColumns) std::fprintf(out, "%.17g,", column.value(t, s));
-  std::fprintf(out, "%s\n", to_string(event));
+  std::fprintf(out, "%s,%s\n", to_string(s.phase), to_string(event));
 }
 
 /// Runs the scene and writes the header comment (the method that runs, and why), the header

@@ -23,8 +23,27 @@ const char* to_string(Event event) {
     case Event::kFallen: return "fallen";
     case Event::kNonFinite: return "non_finite";
     case Event::kEnergyDrift: return "energy_drift";
+    case Event::kTakeOff: return "take_off";
+    case Event::kLanding: return "landing";
   }
   return "";
+}
+
+const char* to_string(AfterLiftOff rule) { return rule == AfterLiftOff::kFly ? "fly" : "stop"; }
+
+const char* to_string(Phase phase) {
+  switch (phase) {
+    case Phase::kContact: return "contact";
+    case Phase::kFlight: return "flight";
+    case Phase::kSkim: return "skim";
+  }
+  return "";
+}
+
+AfterLiftOff parse_after_lift_off(const std::string& name) {
+  for (AfterLiftOff rule : {AfterLiftOff::kFly, AfterLiftOff::kStop})
+    if (name == to_string(rule)) return rule;
+  throw InvalidParameter("after_lift_off", "'" + name + "' is not one of fly, stop");
 }
 
 const char* to_string(SceneType scene) {
@@ -252,6 +271,10 @@ void validate_motion_rates(const SceneConfig& config) {
 void validate(const SceneConfig& config) {
   validate(config.top);
   validate(config.initial);
+  if (!(std::cos(config.initial.tilt) > config.top.fallen_vertical()))
+    throw InvalidParameter("initial/tilt", "the rim (rim_radius, rim_distance) starts on or under the floor: need |tilt| < " +
+                                               format_seconds(std::atan2(config.top.rim_distance, config.top.rim_radius)) +
+                                               " rad, got " + format_seconds(config.initial.tilt));
   validate(config.integrator);
   validate_motion_rates(config);
   if (config.scene != SceneType::kViscous) {

@@ -28,6 +28,9 @@ inline SceneConfig adaptive(SceneType scene, const InitialConditions& initial, d
                             const TopParameters& top = toy_top()) {
   SceneConfig config;
   config.scene = scene;
+  // The seed's contact model and its validity events: a lift-off ends the run (the hybrid model's
+  // flights and landings have their own tests, test_hybrid.cpp).
+  config.after_lift_off = AfterLiftOff::kStop;
   config.top = top;
   config.initial = initial;
   config.integrator.type = IntegratorType::kDopri5;

@@ -28,6 +28,7 @@ using namespace core_test;
 SceneConfig kicked_top(SceneType scene, double nutation_rate) {
   SceneConfig config;
   config.scene = scene;
+  config.after_lift_off = AfterLiftOff::kStop;  // the lift-off is what these tests locate
   config.top.gravity = 9.81;
   config.initial.tilt = 0.5;
   config.initial.spin = 150.0;

@@ -204,6 +204,7 @@ TEST(Defaults, TheKeyTableGivesTheStructsDefaults) {
   const SceneConfig parsed = parse_scene_config({}, /*require_all=*/false);
   const SceneConfig built;
   EXPECT_EQ(parsed.scene, built.scene);
+  EXPECT_EQ(parsed.after_lift_off, built.after_lift_off);
   EXPECT_TRUE(same_bits(parsed.top, built.top));
   EXPECT_TRUE(same_bits(parsed.initial, built.initial));
   EXPECT_EQ(parsed.integrator.type, built.integrator.type);
@@ -221,7 +222,7 @@ TEST(Defaults, TheKeyTableGivesTheStructsDefaults) {
     EXPECT_TRUE(same_bits(parse_number(key, spec->default_value), entry.value)) << key;
     ++numeric;
   }
-  EXPECT_EQ(numeric + 2, static_cast<int>(parameter_specs().size()));  // + scene, integrator
+  EXPECT_EQ(numeric + 3, static_cast<int>(parameter_specs().size()));  // + scene, integrator, after_lift_off
 }
 
 void expect_parse_refused(const ParameterMap& values, bool require_all, const std::string& key,

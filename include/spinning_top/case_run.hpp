@@ -65,7 +65,7 @@ void validate(const CaseSettings& settings);
 /// A case's result. Every number is finite (a case that ends in non_finite reports the last
 /// finite state, as the simulator does).
 struct CaseOutcome {
-  Event event = Event::kNone;    ///< the first event, kNone if the run reached the duration
+  Event event = Event::kNone;    ///< the terminal event, kNone if the run reached the duration
   bool out_of_steps = false;     ///< stopped by max_steps before the duration or an event
   double end_time = 0.0;         ///< [s] the duration, the event's time, or where the steps ran out
   double min_normal_force = 0.0; ///< [N] least R over the run: exact's closed form, else the samples
@@ -78,7 +78,12 @@ struct CaseOutcome {
   double energy_balance_error = 0.0;
   IntegratorType method = IntegratorType::kAuto;  ///< what ran at the end (never kAuto)
   bool fallback = false;         ///< auto ran its fallback (exact refused the state)
-  long steps = 0;                ///< accepted integration steps
+  long steps = 0;                ///< accepted integration steps (and one per transition)
+  // The hops (HYBRID.md; Simulator::hops): counted at their transitions, the height exact.
+  long lift_offs = 0;            ///< lift_off transitions (the run went on)
+  long landings = 0;             ///< landings
+  double first_lift_off_time = -1.0;  ///< [s] the first lift_off, -1 if none
+  double max_hop_height = 0.0;   ///< [m] the highest the tip rose above the floor
 };
 
 /// Runs one case. Throws InvalidParameter for an invalid configuration or settings (the

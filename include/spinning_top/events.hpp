@@ -10,6 +10,8 @@
 #include <cmath>
 #include <limits>
 #include <string>
+#include <type_traits>
+#include <utility>
 
 #include "spinning_top/hot_path.hpp"
 #include "spinning_top/kinematics.hpp"
@@ -27,6 +29,10 @@ enum class Event {
   /// large, tolerance too loose for the motion), never physics; the run stops at the last step
   /// that kept the balance.
   kEnergyDrift,
+  // Transitions of the hybrid model (HYBRID.md), after which the run goes on; kLiftOff above is
+  // one too where the top flies on.
+  kTakeOff,  ///< a skimming tip leaves the floor
+  kLanding,  ///< the tip reaches the floor from the air
 };
 
 /// The energy balance that a step may not break: |B(t) - B(0)| <= kEnergyBalanceTolerance
@@ -38,7 +44,8 @@ enum class Event {
 /// dop853 at tolerance 9e-5 with friction) breaks it within a few steps.
 constexpr double kEnergyBalanceTolerance = 1e-3;
 
-/// "lift_off", "fallen", "non_finite", "energy_drift", or "" for kNone (the CSV and ROS spelling).
+/// "lift_off", "fallen", "non_finite", "energy_drift", "take_off", "landing", or "" for kNone (the
+/// CSV and ROS spelling).
 const char* to_string(Event event);
 
 template <class State>
@@ -46,11 +53,26 @@ bool all_finite(const State& y) {
   return y.array().isFinite().all();
 }
 
-/// The event functions g(y) = (R, e_Zz): the model is valid while both are positive. The
-/// first to turn negative (or e_Zz to reach zero) ends the run.
+/// The floor's validity function of a contact model: R, or where the model says otherwise
+/// (viscous skimming, scenes/viscous.hpp: contact_validity) its own function of the same sign rule.
+template <class Model, class = void>
+struct HasContactValidity : std::false_type {};
+template <class Model>
+struct HasContactValidity<Model, std::void_t<decltype(std::declval<const Model&>().contact_validity(
+                                      std::declval<const typename Model::State&>()))>> : std::true_type {};
+
+/// The event functions g(y) = (R, e_Zz - u_fall): the model is valid while both are positive. The
+/// first to turn negative (or the second to reach zero) ends the contact phase. u_fall =
+/// TopParameters::fallen_vertical(), where the rim touches the floor (0 for a needle: the axis
+/// on the floor, the seed's rule, bit for bit).
 template <class Model>
 Eigen::Vector2d event_functions(const Model& model, const typename Model::State& y) {
-  return Eigen::Vector2d(model.normal_force(y), vertical_in_body(y).z());
+  double floor;
+  if constexpr (HasContactValidity<Model>::value)
+    floor = model.contact_validity(y);
+  else
+    floor = model.normal_force(y);
+  return Eigen::Vector2d(floor, vertical_in_body(y).z() - model.parameters().fallen_vertical());
 }
 
 /// Index of each event function in event_functions() and the event it raises.

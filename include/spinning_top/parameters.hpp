@@ -2,6 +2,7 @@
 // Units are SI (REP-103). Symbols follow doc/spec/PHYSICS.md.
 #pragma once
 
+#include <cmath>
 #include <stdexcept>
 #include <string>
 
@@ -17,9 +18,19 @@ struct TopParameters {
   double tip_distance = defaults::kTipDistance;  ///< h [m], distance from the tip P to the centre of mass G
   double gravity = defaults::kGravity;  ///< g [m/s^2]
   double friction = defaults::kFriction;  ///< k [N s/m], viscous friction F = -k v_P (viscous scene)
+  /// The body's rim (HYBRID.md, "fallen"): a circle of radius b centred on the axis at distance a
+  /// from the tip. b = 0 is a needle: the top has fallen when its axis reaches the floor.
+  double rim_radius = defaults::kRimRadius;      ///< b [m]
+  double rim_distance = defaults::kRimDistance;  ///< a [m]
+  /// Landings (HYBRID.md, "landing"): v_Pz+ = -e v_Pz-, plastic (e = 0) below restitution_speed.
+  double restitution = defaults::kRestitution;               ///< e in [0, 1)
+  double restitution_speed = defaults::kRestitutionSpeed;    ///< [m/s]
 
   /// A0 = A + m h^2: transverse moment about the tip (parallel-axis theorem).
   double inertia_about_tip() const { return inertia_transverse + mass * tip_distance * tip_distance; }
+  /// e_Zz at which the rim touches the floor while the tip is on it: the lowest rim point's height
+  /// above the tip, a e_Zz - b sqrt(1 - e_Zz^2), is zero at e_Zz = b / sqrt(a^2 + b^2); 0 for a needle.
+  double fallen_vertical() const { return rim_radius > 0.0 ? rim_radius / std::hypot(rim_distance, rim_radius) : 0.0; }
 };
 
 /// Initial state in z-x-z Euler angles (Goldstein): q0 = Rz(heading) Rx(tilt) Rz(spin_angle).
@@ -48,7 +59,8 @@ class InvalidParameter : public std::invalid_argument {
   std::string parameter_;
 };
 
-/// Throws InvalidParameter unless: all finite; m, A, C > 0; h, g, k >= 0; C <= 2A.
+/// Throws InvalidParameter unless: all finite; m, A, C > 0; h, g, k, a, b >= 0; C <= 2A; b > 0 only
+/// with a > 0; e in [0, 1); restitution_speed >= 0.
 void validate(const TopParameters& parameters);
 
 /// Throws InvalidParameter unless all values are finite and the axis starts above the

@@ -5,6 +5,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "spinning_top/events.hpp"
 #include "spinning_top/kinematics.hpp"
@@ -15,6 +16,13 @@
 namespace spinning_top {
 
 enum class SceneType { kFixedTip, kFrictionless, kViscous };
+/// What the run does where the tip would leave the floor (HYBRID.md, "lift_off"): fly on (and
+/// land, bounce, skim), or stop there with the event `lift_off` (the seed's contact model alone).
+enum class AfterLiftOff { kFly, kStop };
+/// The phase of the motion (HYBRID.md, "Phases"): the tip on the floor (the scene's contact
+/// model), in the air (torque-free about G, G on a parabola), or skimming (viscous: on the floor
+/// with R = 0 and reduced friction).
+enum class Phase { kContact, kFlight, kSkim };
 /// The integrators; integrator_registry.hpp says what each is, which scenes it serves and its
 /// kind (integrators/registry_rows.hpp defines them). kAuto runs auto_plan()'s choice.
 /// doc/integrators.md explains them.
@@ -24,6 +32,10 @@ enum class IntegratorType {
 
 const char* to_string(SceneType scene);
 const char* to_string(IntegratorType integrator);
+const char* to_string(AfterLiftOff rule);  ///< "fly" | "stop"
+const char* to_string(Phase phase);        ///< "contact" | "flight" | "skim"
+/// Parses "fly" | "stop"; throws InvalidParameter("after_lift_off", ...).
+AfterLiftOff parse_after_lift_off(const std::string& name);
 /// Parses "fixed_tip" | "frictionless" | "viscous"; throws InvalidParameter("scene", ...).
 SceneType parse_scene(const std::string& name);
 /// Parses "auto" | "rk4" | "dopri5" | "dop853" | "splitting4" | "splitting6" | "splitting8" | "gauss6" |
@@ -46,6 +58,7 @@ void validate(const IntegratorSettings& settings);
 /// Defaults: its parts'; `scene` here (the key table shows its name as the `scene` key's default).
 struct SceneConfig {
   SceneType scene = SceneType::kFixedTip;
+  AfterLiftOff after_lift_off = AfterLiftOff::kFly;
   TopParameters top;
   InitialConditions initial;
   IntegratorSettings integrator;
@@ -111,7 +124,17 @@ struct IntegratorChoice {
 /// Extremes of a run over [0, time()].
 struct MotionRange {
   double max_tilt = 0.0;          ///< [rad] the largest angle of the axis from the vertical
-  double min_normal_force = 0.0;  ///< [N] the least R
+  double min_normal_force = 0.0;  ///< [N] the least R (0 once the tip has been off the floor)
+};
+
+/// The hops of a run over [0, time()] (HYBRID.md): counted at their transitions.
+struct HopSummary {
+  long lift_offs = 0;   ///< transitions contact -> flight or skim (`lift_off` rows)
+  long take_offs = 0;   ///< skim -> flight
+  long landings = 0;    ///< flight -> floor
+  double first_lift_off_time = -1.0;  ///< [s] the first lift_off (a transition or the terminal event), -1: none
+  double max_hop_height = 0.0;        ///< [m] the highest the tip rose above the floor
+  double impact_loss = 0.0;           ///< [J] kinetic energy lost in landings
 };
 
 /// What a front end shows of the simulation at one instant.
@@ -119,7 +142,18 @@ struct Snapshot {
   double time = 0.0;                          ///< simulated time [s]
   Quaternion attitude = Quaternion::Identity();  ///< body -> world, unit norm
   Vector3 body_rates = Vector3::Zero();       ///< (omega_X, omega_Y, omega_Z) [rad/s]
+  Phase phase = Phase::kContact;
+  /// contact_point is the tip P, its z the tip's height (0 on the floor); normal_force and
+  /// contact_force are 0 in flight; dissipated_energy includes the impacts' losses.
   ModelOutputs outputs;
+};
+
+/// A transition of the hybrid model, where the run goes on (HYBRID.md): `lift_off` (contact ->
+/// flight or skim), `take_off` (skim -> flight), `landing` (flight -> contact, or a bounce), with
+/// the state at that instant (state.time).
+struct Transition {
+  Event event = Event::kNone;
+  Snapshot state;
 };
 
 class Simulator {
@@ -127,7 +161,9 @@ class Simulator {
   virtual ~Simulator() = default;
 
   /// Advances the simulation to time t [s] (no-op for t <= time()). Stops early at the first
-  /// validity event, which it returns (then time() is the event time); kNone otherwise. Throws
+  /// terminal event (fallen, non_finite, energy_drift, or lift_off where the run cannot fly on),
+  /// which it returns (then time() is the event time); kNone otherwise. Transitions on the way
+  /// (lift_off, take_off, landing) do not stop it: take_transitions() hands them over. Throws
   /// std::invalid_argument for a non-finite t.
   Event advance_to(double t) { return advance_to(t, WorkBudget::unlimited()); }
   /// The same within a work budget (work_budget.hpp): if it runs out first, returns kNone with
@@ -159,8 +195,15 @@ class Simulator {
   /// the turning points of the nutation and R as a function of e_Zz (no peak between samples can
   /// be missed). nullopt for a time-stepper, and after an update() (the run then had two models).
   virtual std::optional<MotionRange> motion_range() const = 0;
-  /// Accepted integration steps since the last reset (a cost measure).
+  /// Accepted integration steps since the last reset (a cost measure; a transition counts one).
   virtual long steps() const = 0;
+  /// The transitions passed since the last call (or reset), in time order, each with its state:
+  /// what the front ends show as rows or event messages between their requested times.
+  virtual std::vector<Transition> take_transitions() = 0;
+  /// The hops so far (since the last reset).
+  virtual HopSummary hops() const = 0;
+  /// The phase now.
+  virtual Phase phase() const = 0;
 };
 
 /// Builds the scene's model with the chosen integrator. Throws InvalidParameter.

@@ -1,6 +1,6 @@
 // The viscous scene's simulators, one per integrator that serves it (the registry's rows): the
 // scene's drivers are instantiated here and nowhere else.
-#include "scene_simulator.hpp"
+#include "hybrid_simulator.hpp"
 
 namespace spinning_top {
 namespace scene_factory {

@@ -80,6 +80,7 @@ class ExactSolution {
     from.tip_distance = h;
     from.spin = model.spin();
     from.axial = p.inertia_axial;
+    from.fallen_vertical = p.fallen_vertical();
     State unit = y0;
     normalize_attitude(unit);
     from.q0 = attitude_of(unit);

@@ -5,6 +5,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <algorithm>
 
 #include "spinning_top/kinematics.hpp"
 #include "spinning_top/model_outputs.hpp"
@@ -22,8 +23,32 @@ class Viscous {
   static constexpr const char* kName = "viscous";
   using State = Eigen::Matrix<double, kStateSize, 1>;
 
-  Viscous(const TopParameters& parameters, const InitialConditions& initial)
-      : parameters_(parameters), initial_(initial), spin_(initial.spin), contact_(parameters, initial.spin) {}
+  /// skimming: the tip skims the floor (HYBRID.md, "lift_off", viscous): R = 0 and the friction is
+  /// scaled by the lambda in [0, 1] that keeps R at 0.
+  Viscous(const TopParameters& parameters, const InitialConditions& initial, bool skimming = false)
+      : parameters_(parameters), initial_(initial), spin_(initial.spin), contact_(parameters, initial.spin),
+        skimming_(skimming) {}
+
+  bool skimming() const { return skimming_; }
+
+  /// What bounds the floor phase (events.hpp: event_functions): R while sliding; while skimming,
+  /// min(eps - R1, R0) with R1 = R under full friction and R0 = R without friction. The skim ends
+  /// where R1 rises above eps = kSkimReturn m g (the floor pushes again: back to sliding) or R0
+  /// turns negative (the free tip rises: take-off). eps keeps the skim that begins at a located
+  /// lift-off, where R1 is 0 up to the locator's ulps, from ending at once.
+  double contact_validity(const State& y) const {
+    if (!skimming_) return normal_force(y);
+    const Evaluation e = evaluate(y);
+    return std::min(kSkimReturn * parameters_.mass * parameters_.gravity - e.full_friction_normal_force,
+                    e.frictionless_normal_force);
+  }
+  static constexpr double kSkimReturn = 1e-9;
+
+  /// R without friction and with full friction at y (the lift-off rule and the skim's ends).
+  Vector2 normal_force_range(const State& y) const {
+    const Evaluation e = evaluate(y);
+    return Vector2(e.frictionless_normal_force, e.full_friction_normal_force);
+  }
 
   State initial_state() const {
     State y;
@@ -93,6 +118,7 @@ class Viscous {
     Vector2 friction;      // F = -k v_P, horizontal world components
     Vector3 axis;          // e_Z in world components
     SlidingContact::Result dynamics;
+    double frictionless_normal_force = 0.0, full_friction_normal_force = 0.0;  // skimming only
   };
 
   /// v_P = v_G - h w x e_Z in world components (PHYSICS.md erratum 3: the vertical part
@@ -115,6 +141,19 @@ class Viscous {
     const Vector2 friction_body(e.friction.x() * ex.x() + e.friction.y() * ex.y(),
                                 e.friction.x() * ey.x() + e.friction.y() * ey.y());
     e.dynamics = contact_.solve(gamma, wx, wy, friction_body);
+    if (skimming_) {
+      // R is affine in the friction's scale lambda: R(lambda) = R0 + lambda (R1 - R0) = 0 at
+      // lambda = R0 / (R0 - R1) (R1 <= 0 <= R0 while skimming), and so are (wX', wY').
+      const SlidingContact::Result free = contact_.solve(gamma, wx, wy);
+      e.frictionless_normal_force = free.normal_force;
+      e.full_friction_normal_force = e.dynamics.normal_force;
+      const double span = free.normal_force - e.dynamics.normal_force;
+      const double lambda = span > 0.0 ? std::clamp(free.normal_force / span, 0.0, 1.0) : 1.0;
+      e.friction *= lambda;
+      e.dynamics.transverse_acceleration =
+          free.transverse_acceleration + lambda * (e.dynamics.transverse_acceleration - free.transverse_acceleration);
+      e.dynamics.normal_force = 0.0;
+    }
     return e;
   }
 
@@ -122,6 +161,7 @@ class Viscous {
   InitialConditions initial_;
   double spin_;
   SlidingContact contact_;
+  bool skimming_ = false;
 };
 
 }  // namespace spinning_top

@@ -42,6 +42,7 @@ struct Start {
   double gravity = 0.0, tip_distance = 0.0;
   double spin = 0.0;          ///< wZ [rad/s], a constant of motion
   double axial = 0.0;         ///< C [kg m^2]
+  double fallen_vertical = 0.0;  ///< e_Zz where the rim reaches the floor (TopParameters::fallen_vertical)
   Quaternion q0 = Quaternion::Identity();
   double wx0 = 0.0, wy0 = 0.0;  ///< omega_X, omega_Y at t0 [rad/s]
 };

@@ -46,8 +46,8 @@ class FreeRotation {
       return phase < 0.0 ? phase + two_pi : phase;
     };
     double first = std::numeric_limits<double>::infinity();
-    if (a - rho <= 0.0) {
-      first = ahead(delta + std::acos(std::clamp(-a / rho, -1.0, 1.0)));
+    if (a - rho <= from.fallen_vertical) {
+      first = ahead(delta + std::acos(std::clamp((from.fallen_vertical - a) / rho, -1.0, 1.0)));
       event_ = Event::kFallen;
     }
     // R = m (g + z_G'') with z_G = h e_Zz, so R < 0 while cos(w t - delta) > g / (h w^2 rho): from

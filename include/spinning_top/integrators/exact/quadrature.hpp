@@ -91,6 +91,7 @@ class Quadrature {
   Quadrature(const Start& from, const Vector3& gamma, double sin2)
       : t0_(from.t0), alpha_d_(from.alpha_d), kappa_(from.kappa), gravity_(from.gravity),
         tip_distance_(from.tip_distance), spin_(from.spin) {
+    fallen_vertical_ = from.fallen_vertical;
     const double wx0 = from.wx0, wy0 = from.wy0;
     const double qx = from.q0.x(), qy = from.q0.y();
     u0_ = gamma.z();
@@ -627,8 +628,9 @@ class Quadrature {
       if (ahead > period_w - 8.0 * kEpsilon * period_w) ahead = 0.0;  // at the start, up to round-off
       if (ahead < best) best = ahead, which = event;
     };
-    // Fall: u crosses 0 downwards (u1 <= 0), on the falling branch.
-    if (u0_ + v1_ <= 0.0) consider(period_w - phase_of_v(-u0_), Event::kFallen);
+    // Fall: u crosses u_fall (0 for a needle, TopParameters::fallen_vertical) downwards (u1 <= u_fall),
+    // on the falling branch.
+    if (u0_ + v1_ <= fallen_vertical_) consider(period_w - phase_of_v(fallen_vertical_ - u0_), Event::kFallen);
     // Lift-off: R turns negative where P changes sign in (u1, u2); rising branch if P falls
     // with u there, falling branch if it rises.
     const Polynomial p = normal_force_sign(), dp = derivative(p);
@@ -646,6 +648,7 @@ class Quadrature {
   double t0_ = 0.0;
   double alpha_d_ = 0.0, kappa_ = 0.0, gravity_ = 0.0, tip_distance_ = 0.0, spin_ = 0.0;
   double rate_scale_ = 0.0;
+  double fallen_vertical_ = 0.0;
   // u0, 1 - u0, the cubic's Taylor coefficients about u0 and roots in v = u - u0.
   double u0_ = 1.0, d0_ = 0.0, c_ = 0.0, p0_ = 0.0, f0_ = 0.0, f1_ = 0.0, f2_ = 0.0;
   double v1_ = 0.0, v2_ = 0.0, v3_ = 0.0, delta_ = 0.0;
