@@ -50,6 +50,10 @@ class Flight {
 
   Flight() = default;
 
+  /// From any free state: the tip's height and vertical velocity from the state.
+  Flight(const TopParameters& p, double t0, const FreeBody& start) : Flight(p, t0, start, tip_of(p, start)) {}
+
+  /// From the floor: the tip's height and vertical velocity as given (TipStart).
   Flight(const TopParameters& p, double t0, const FreeBody& start, const TipStart& tip)
       : p_(p), t0_(t0), start_(start), tip_(tip) {
     a_ = p.inertia_transverse;
@@ -189,6 +193,12 @@ class Flight {
   }
 
  private:
+  static TipStart tip_of(const TopParameters& p, const FreeBody& s) {
+    const Vector3 axis = s.attitude * Vector3::UnitZ();
+    const Vector3 r = -p.tip_distance * axis;
+    return {s.position.z() + r.z(), (s.velocity + (s.attitude * s.body_rates).cross(r)).z()};
+  }
+
   /// x - sin x without cancellation: its Taylor series below 0.5 (terms to x^15, the rest below
   /// 1e-20 relative).
   static double x_minus_sin(double x) {
