@@ -117,8 +117,8 @@ class HybridSimulator final : public Simulator {
       next.top = top;
       next.integrator = integrator;
       validate(next);
-      throw InvalidParameter("gravity", std::string("cannot change while the tip is off the floor (") + to_string(phase_) +
-                                            "); the run goes on unchanged");
+      throw InvalidParameter(changed_key(top, integrator), std::string("cannot change while the tip is off the floor (") +
+                                                                to_string(phase_) + "); the run goes on unchanged");
     }
     const bool switched = contact_->update(top, integrator);
     config_.top = top;
@@ -146,6 +146,28 @@ class HybridSimulator final : public Simulator {
   Phase phase() const override { return phase_; }
 
  private:
+  /// The first key an update changes (for its refusal's message).
+  std::string changed_key(const TopParameters& top, const IntegratorSettings& integrator) const {
+    const TopParameters& p = config_.top;
+    const std::pair<const char*, bool> keys[] = {
+        {"mass", top.mass != p.mass},
+        {"inertia_transverse", top.inertia_transverse != p.inertia_transverse},
+        {"inertia_axial", top.inertia_axial != p.inertia_axial},
+        {"tip_distance", top.tip_distance != p.tip_distance},
+        {"gravity", top.gravity != p.gravity},
+        {"friction", top.friction != p.friction},
+        {"rim_radius", top.rim_radius != p.rim_radius},
+        {"rim_distance", top.rim_distance != p.rim_distance},
+        {"restitution", top.restitution != p.restitution},
+        {"restitution_speed", top.restitution_speed != p.restitution_speed},
+        {"step", integrator.step != config_.integrator.step},
+        {"tolerance", integrator.tolerance != config_.integrator.tolerance},
+    };
+    for (const auto& [key, changed] : keys)
+      if (changed) return key;
+    return "integrator";
+  }
+
   Event end(Event event) {
     terminal_ = event;
     return event;
@@ -233,7 +255,12 @@ class HybridSimulator final : public Simulator {
         return;
       }
     }
-    if constexpr (kViscous) flies = contact_->model().normal_force_range(y).x() < 0.0;
+    // Viscous: a_f = -(det T / m) R0, so the tip flies where R0 < 0 and skims where friction alone
+    // holds R down. At the located lift-off R0 >= R1 >= 0 by ulps where friction plays no part
+    // (k = 0, or v_P = 0): a skim there would end at once, so R0 below the skim's own return
+    // margin flies (a dive of at most eps / m, which the flight's start absorbs).
+    if constexpr (kViscous)
+      flies = contact_->model().normal_force_range(y).x() < Viscous::kSkimReturn * config_.top.mass * config_.top.gravity;
     ++hops_.lift_offs;
     if (flies) {
       fly_from_floor();

@@ -41,6 +41,7 @@ SceneConfig general_state(const std::string& scene) {
 }
 
 SceneConfig with(SceneConfig c, IntegratorType type, double tolerance = 1e-13) {
+  c.after_lift_off = AfterLiftOff::kStop;  // the contact model's closed form and its events
   c.integrator.type = type;
   c.integrator.tolerance = tolerance;
   return c;

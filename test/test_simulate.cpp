@@ -28,18 +28,18 @@
 namespace {
 
 const std::string kHeader =
-    "t,qw,qx,qy,qz,gx,gy,gz,px,py,normal_force,contact_force_x,contact_force_y,energy,event";
+    "t,qw,qx,qy,qz,gx,gy,gz,px,py,pz,normal_force,contact_force_x,contact_force_y,energy,phase,event";
 const std::string kIntegratorComment = "# integrator: ";
 const std::string kFixedTipYaml = std::string(SPINNING_TOP_SOURCE_DIR) + "/config/fixed_tip.yaml";
 
 // The toy top of config/fixed_tip.yaml (checked against the file in FirstRowIsTheInitialState).
 constexpr double kMass = 0.1, kA = 4e-5, kC = 6e-5, kH = 0.02, kG = 9.80665, kTilt = 0.3, kSpin = 150.0;
 
-enum Column { kT, kQw, kQx, kQy, kQz, kGx, kGy, kGz, kPx, kPy, kNormal, kFx, kFy, kEnergy, kColumns };
+enum Column { kT, kQw, kQx, kQy, kQz, kGx, kGy, kGz, kPx, kPy, kPz, kNormal, kFx, kFy, kEnergy, kColumns };
 
 struct Row {
   std::vector<double> values;  ///< kColumns numbers
-  std::string event;
+  std::string phase, event;    ///< the text columns after them
 };
 
 struct Result {
@@ -125,15 +125,17 @@ class SimulateTest : public ::testing::Test {
       for (std::size_t comma; (comma = line.find(',', start)) != std::string::npos; start = comma + 1)
         fields.push_back(line.substr(start, comma - start));
       fields.push_back(line.substr(start));
-      EXPECT_EQ(fields.size(), static_cast<std::size_t>(kColumns + 1)) << line;
-      if (fields.size() != static_cast<std::size_t>(kColumns + 1)) continue;
+      EXPECT_EQ(fields.size(), static_cast<std::size_t>(kColumns + 2)) << line;
+      if (fields.size() != static_cast<std::size_t>(kColumns + 2)) continue;
       Row row;
       for (int i = 0; i < kColumns; ++i) {
         char* end = nullptr;
         row.values.push_back(std::strtod(fields[i].c_str(), &end));
         EXPECT_EQ(*end, '\0') << "not a number: '" << fields[i] << "'";
       }
-      row.event = fields[kColumns];
+      row.phase = fields[kColumns];
+      row.event = fields[kColumns + 1];
+      EXPECT_TRUE(row.phase == "contact" || row.phase == "flight" || row.phase == "skim") << line;
       rows.push_back(row);
     }
     return rows;
@@ -378,7 +380,9 @@ double pendulum_fall_time() {
 }
 
 TEST_F(SimulateTest, TopWithoutSpinFallsAndTheLastRowSaysSo) {
-  const Result r = simulate({"--config", kFixedTipYaml, "--set", "initial/spin=0", "--duration", "2"});
+  // A needle (no rim: the pendulum falls until its axis reaches the floor).
+  const Result r = simulate({"--config", kFixedTipYaml, "--set", "initial/spin=0", "--set", "rim_radius=0", "--set",
+                             "rim_distance=0", "--duration", "2"});
   ASSERT_EQ(r.exit_code, 0) << r.err;  // an event ends the run early, still a success
   const std::vector<Row> rows = parse_csv(r.out);
   ASSERT_GE(rows.size(), 2u);
@@ -403,7 +407,9 @@ TEST_F(SimulateTest, TopWithoutSpinFallsAndTheLastRowSaysSo) {
 TEST_F(SimulateTest, FastNutationLiftsTheTipWhereTheNormalForceVanishes) {
   // theta_dot0 = 20 rad/s: the centripetal term m h cos(theta) theta_dot^2 = 0.76 N is close to
   // m g = 0.98 N, and the nutation drives R through zero within 0.05 s.
-  const Result r = simulate({"--config", kFixedTipYaml, "--set", "initial/nutation_rate=20", "--duration", "1"});
+  // after_lift_off: stop, the contact model's end (flying on is HybridRun's, test_hybrid.cpp).
+  const Result r = simulate({"--config", kFixedTipYaml, "--set", "initial/nutation_rate=20", "--set",
+                             "after_lift_off=stop", "--duration", "1"});
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const std::vector<Row> rows = parse_csv(r.out);
   ASSERT_GE(rows.size(), 2u);
@@ -417,7 +423,8 @@ TEST_F(SimulateTest, FastNutationLiftsTheTipWhereTheNormalForceVanishes) {
   // theta_dot0 = 100 rad/s: m h cos(theta) theta_dot^2 = 19 N >> m g, so R < 0 already at t = 0:
   // the run is one row, the initial state, with the event.
   const Result at_start =
-      simulate({"--config", kFixedTipYaml, "--set", "initial/nutation_rate=100", "--duration", "1"});
+      simulate({"--config", kFixedTipYaml, "--set", "initial/nutation_rate=100", "--set", "after_lift_off=stop",
+                "--duration", "1"});
   ASSERT_EQ(at_start.exit_code, 0) << at_start.err;
   const std::vector<Row> one = parse_csv(at_start.out);
   ASSERT_EQ(one.size(), 1u);
