@@ -212,7 +212,7 @@ const OutcomeColumn kOutcomeColumns[] = {
        return r.outcome && r.outcome->event != Event::kNone ? r.outcome->end_time : kNaN;
      }},
     {"end_time", "[s] the duration, the event's time, or where max_steps ran out", &CaseOutcome::end_time},
-    {"min_normal_force", "[N] least R over the run (exact: closed form; time-steppers: the samples)",
+    {"min_normal_force", "[N] least R over the run (exact: closed form; time-steppers, and runs whose tip left the floor: the samples)",
      &CaseOutcome::min_normal_force},
     {"max_tilt", "[rad] largest angle of the axis from the vertical (likewise)", &CaseOutcome::max_tilt},
     {"final_tilt", "[rad] at end_time", &CaseOutcome::final_tilt},
