@@ -78,7 +78,17 @@ const StateField kStateFields[] = {
     {"contact_point", 3, [](const Snapshot& s, double* v) { write3(s.outputs.contact_point, v); }},
     {"energy", 1, [](const Snapshot& s, double* v) { *v = s.outputs.energy; }},
     {"friction_work", 1, [](const Snapshot& s, double* v) { *v = s.outputs.dissipated_energy; }},
+    // The tip's height above the floor (simulate's pz): 0 in contact, > 0 in flight (HYBRID.md).
+    {"tip_height", 1, [](const Snapshot& s, double* v) { *v = s.outputs.contact_point.z(); }},
 };
+
+/// Texts as a numpy array of str (dtype '<U…'), so that rows can be picked by comparison
+/// (run["phase"] == "flight"); an empty list still gives a str array.
+py::array text_column(const std::vector<const char*>& texts) {
+  py::list list;
+  for (const char* text : texts) list.append(py::str(text));
+  return py::module_::import("numpy").attr("array")(list, py::arg("dtype") = "str");
+}
 
 py::dict snapshot_dict(const Snapshot& s) {
   py::dict d;
@@ -91,6 +101,7 @@ py::dict snapshot_dict(const Snapshot& s) {
     else
       d[field.name] = py::array_t<double>(field.width, values);
   }
+  d["phase"] = to_string(s.phase);
   // The snapshot's alone: Simulator.run has no column for it.
   d["vertical_angular_momentum"] = s.outputs.vertical_angular_momentum;
   return d;
@@ -108,8 +119,11 @@ class StepBudgetExceeded : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-/// The trajectory at `times` (increasing), as simulate writes it: stops at the first event,
-/// whose row has the event's time. Columns of equal length; "event" names the event or is "".
+/// The trajectory at `times` (increasing), as simulate writes it: a row at each time asked for, and
+/// one at each transition of the hybrid model (lift_off, take_off, landing) at its own time; stops
+/// at the first terminal event, whose row has the event's time. Columns of equal length: the
+/// state's fields, "phase" and "events" (simulate's phase and event columns, numpy arrays of str);
+/// "event" (one str) is the terminal event or "".
 py::dict run_trajectory(Simulator& simulator, const py::array_t<double, py::array::c_style | py::array::forcecast>& times,
                         double max_steps) {
   checked_max_steps(max_steps);
@@ -122,12 +136,17 @@ py::dict run_trajectory(Simulator& simulator, const py::array_t<double, py::arra
     throw py::value_error("times must start at or after the simulator's time (" + exact_text(simulator.time()) + " s)");
   std::vector<double> time;
   std::vector<std::vector<double>> fields(std::size(kStateFields));  // kStateFields' columns, row after row
+  std::vector<const char*> phases, events;                           // to_string's static texts
   SampledRun sampled;
   {
     py::gil_scoped_release release;
+    // Transitions that earlier advance_to calls passed and nobody took are before these rows.
+    simulator.take_transitions();
     sampled = sample_run(simulator, n, [&](long long i) { return t(i); }, max_steps, StateWhereStepsRunOut::kDrop,
-                         [&](double row_time, const Snapshot& s, Event) {
+                         [&](double row_time, const Snapshot& s, Event event) {
                            time.push_back(row_time);
+                           phases.push_back(to_string(s.phase));
+                           events.push_back(to_string(event));
                            for (std::size_t k = 0; k < fields.size(); ++k) {
                              fields[k].resize(fields[k].size() + kStateFields[k].width);
                              kStateFields[k].write(s, fields[k].data() + fields[k].size() - kStateFields[k].width);
@@ -145,6 +164,8 @@ py::dict run_trajectory(Simulator& simulator, const py::array_t<double, py::arra
   py::dict d;
   d["time"] = column(time, 1);
   for (std::size_t k = 0; k < fields.size(); ++k) d[kStateFields[k].name] = column(fields[k], kStateFields[k].width);
+  d["phase"] = text_column(phases);
+  d["events"] = text_column(events);
   d["event"] = std::string(to_string(sampled.event));
   return d;
 }
@@ -180,21 +201,36 @@ struct OutcomeColumn {
   }
 };
 const OutcomeColumn kOutcomeColumns[] = {
-    {"outcome", "none (ran to the duration), lift_off, fallen, energy_drift, non_finite, out_of_steps, refused", nullptr,
+    {"outcome",
+     "the terminal event: none (ran to the duration; hops do not end a run), lift_off (the run cannot fly on: "
+     "after_lift_off stop, or a pivot whose free tip would not rise), fallen, energy_drift, non_finite; or "
+     "out_of_steps, refused",
+     nullptr,
      [](const CaseResult& r) -> CaseValue { return r.outcome ? outcome_name(*r.outcome) : std::string("refused"); }},
     {"event_time", "[s] time of the event, empty if none", nullptr,
      [](const CaseResult& r) -> CaseValue {
        return r.outcome && r.outcome->event != Event::kNone ? r.outcome->end_time : kNaN;
      }},
     {"end_time", "[s] the duration, the event's time, or where max_steps ran out", &CaseOutcome::end_time},
-    {"min_normal_force", "[N] least R over the run (exact: closed form; time-steppers: the samples)",
+    {"min_normal_force", "[N] least R over the run (exact: closed form; time-steppers, and runs whose tip left the floor: the samples)",
      &CaseOutcome::min_normal_force},
     {"max_tilt", "[rad] largest angle of the axis from the vertical (likewise)", &CaseOutcome::max_tilt},
     {"final_tilt", "[rad] at end_time", &CaseOutcome::final_tilt},
     {"final_energy", "[J] E at end_time", &CaseOutcome::final_energy},
-    {"friction_work", "[J] work done against friction by end_time (viscous)", &CaseOutcome::friction_work},
+    {"friction_work", "[J] energy dissipated by end_time: work against friction (viscous) and the landings' losses",
+     &CaseOutcome::friction_work},
     {"energy_balance_error", "max |B - B0| / (|B0| + m g h), B = E - C wZ^2/2 + W (exact: at the end)",
      &CaseOutcome::energy_balance_error},
+    {"lift_offs", "lift_off transitions after which the run went on (0 with after_lift_off stop)", nullptr,
+     [](const CaseResult& r) -> CaseValue { return r.outcome ? static_cast<double>(r.outcome->lift_offs) : kNaN; }},
+    {"landings", "landings of the tip from the air", nullptr,
+     [](const CaseResult& r) -> CaseValue { return r.outcome ? static_cast<double>(r.outcome->landings) : kNaN; }},
+    {"first_lift_off_time", "[s] the first lift_off, a transition or the terminal event; empty if none", nullptr,
+     [](const CaseResult& r) -> CaseValue {
+       return r.outcome && r.outcome->first_lift_off_time >= 0.0 ? r.outcome->first_lift_off_time : kNaN;
+     }},
+    {"max_hop_height", "[m] the highest the tip rose above the floor (0: it never left it)",
+     &CaseOutcome::max_hop_height},
     {"method", "the integrator that ran (auto's choice)", nullptr,
      [](const CaseResult& r) -> CaseValue { return std::string(r.outcome ? to_string(r.outcome->method) : ""); }},
     {"fallback", "auto ran its fallback (exact refused the state)", nullptr,
@@ -340,9 +376,43 @@ PYBIND11_MODULE(_core, m) {
             return std::string(to_string(event));
           },
           py::arg("t"), py::arg("max_steps") = std::numeric_limits<double>::infinity())
-      .def("run", &run_trajectory, py::arg("times"), py::arg("max_steps") = std::numeric_limits<double>::infinity())
-      .def("snapshot", [](const Simulator& s) { return snapshot_dict(s.snapshot()); })
+      .def("run", &run_trajectory, py::arg("times"), py::arg("max_steps") = std::numeric_limits<double>::infinity(),
+           "The trajectory as simulate writes it: a row at each of `times` (increasing, from time on) and one "
+           "at each transition (lift_off, take_off, landing) at its own time; the run stops at its first "
+           "terminal event, whose row has the event's time. A dict of columns: time, the state's fields "
+           "(attitude N x 4 w x y z, body_rates, tilt, normal_force, contact_force, center_of_mass and its "
+           "velocity, contact_point (the tip P), energy, friction_work (friction and impacts), tip_height), "
+           "phase and events (numpy arrays of str: simulate's phase and event columns), and event (str): "
+           "the terminal event or ''.")
+      .def("snapshot", [](const Simulator& s) { return snapshot_dict(s.snapshot()); },
+           "The state now: run()'s fields at time (phase a str), and vertical_angular_momentum.")
+      .def(
+          "take_transitions",
+          [](Simulator& s) {
+            py::list taken;
+            for (const Transition& transition : s.take_transitions())
+              taken.append(py::make_tuple(std::string(to_string(transition.event)), snapshot_dict(transition.state)));
+            return taken;
+          },
+          "The transitions (lift_off, take_off, landing) that advance_to passed since the last call, in time "
+          "order: [(event, snapshot at its time)]. run() shows them as rows instead.")
+      .def(
+          "hops",
+          [](const Simulator& s) {
+            const HopSummary hops = s.hops();
+            py::dict d;
+            d["lift_offs"] = hops.lift_offs;
+            d["take_offs"] = hops.take_offs;
+            d["landings"] = hops.landings;
+            d["first_lift_off_time"] = hops.first_lift_off_time >= 0.0 ? hops.first_lift_off_time : kNaN;
+            d["max_hop_height"] = hops.max_hop_height;
+            d["impact_loss"] = hops.impact_loss;
+            return d;
+          },
+          "The hops so far: counts of lift_off, take_off and landing transitions, the first lift-off's time "
+          "(nan: none), the highest the tip rose [m], the kinetic energy lost in landings [J].")
       .def("reset", &Simulator::reset)
+      .def_property_readonly("phase", [](const Simulator& s) { return std::string(to_string(s.phase())); })
       .def_property_readonly("time", &Simulator::time)
       .def_property_readonly("event", [](const Simulator& s) { return std::string(to_string(s.event())); })
       .def_property_readonly("steps", &Simulator::steps)

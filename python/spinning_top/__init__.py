@@ -7,7 +7,14 @@ conveniences and the parameter sweep::
     sim = st.Simulator({"scene": "fixed_tip", "initial/tilt": 0.3, "initial/spin": 150})
     sim.integrator_description()        # 'auto: exact: closed form, ...'
     traj = sim.run(np.linspace(0, 10, 1001))   # dict of numpy arrays, as `simulate` writes them
+    traj["phase"], traj["events"]       # per row: contact | flight | skim; "" or the transition
     st.run_case({"scene": "fixed_tip", "initial/spin": 0.0, "initial/tilt": 0.3})
+
+After a lift-off the top flies, lands and hops (doc/spec/HYBRID.md; ``after_lift_off: stop``
+ends the run there instead). ``Simulator.run`` has a row at each time asked for and one at each
+transition (lift_off, take_off, landing) at its own time, named in ``events``; ``tip_height`` is
+the tip's height above the floor (0 in contact). ``run_case`` counts the hops (``lift_offs``,
+``landings``, ``first_lift_off_time``, ``max_hop_height``).
 
 Keys are those of the scene files and of the node's parameters (``parameter_specs()``), values
 numbers or text; every configuration is validated by the core, so a bad one raises
@@ -52,8 +59,11 @@ def run_case(keys, duration=_DEFAULT_SETTINGS.duration, sample_rate=_DEFAULT_SET
              max_steps=_DEFAULT_SETTINGS.max_steps):
     """Runs one configuration to `duration` or its first event; returns the row as a dict.
 
-    outcome is 'none' (ran to the end), an event ('lift_off', 'fallen', 'energy_drift',
-    'non_finite') or 'out_of_steps'. A configuration the core refuses raises InvalidParameter.
+    outcome is 'none' (ran to the end; hops do not end a run), the terminal event ('lift_off'
+    where the run cannot fly on, 'fallen', 'energy_drift', 'non_finite') or 'out_of_steps'; the
+    hops are in lift_offs, landings, first_lift_off_time (nan: none) and max_hop_height.
+    sweep.OUTCOME_COLUMNS describes every column. A configuration the core refuses raises
+    InvalidParameter.
     """
     validate(keys)
     row = run_cases(keys, {}, CaseSettings(duration, sample_rate, max_steps))

@@ -1,5 +1,7 @@
 """Stability maps of a sweep (issue 11): each case's outcome, and when its event came, over two
-varied keys; the sleeping-top threshold drawn where it applies.
+varied keys; the sleeping-top threshold drawn where it applies. Cases whose tip left the floor
+(issue 18: it flies, lands and goes on) are drawn apart: `hops` where the run went on to the
+duration, `fallen after hops` where it fell; value="max_hop_height" or "lift_offs" maps the hops.
 
     from spinning_top import stability_map
     stability_map.plot(rows, "initial/spin", "initial/tilt", "map.png")
@@ -10,12 +12,15 @@ import numpy as np
 
 from spinning_top import _core
 
-#: Outcome -> (colour, legend label), in legend order.
+#: Outcome -> (colour, legend label), in legend order: the run's outcome column, with the hops
+#: (lift_offs > 0) and a state refused at the release (end_time 0) told apart.
 OUTCOMES = {
     "none": ("#4a9c3b", "stays up (no event)"),
-    "lift_off": ("#2f6db5", "lift-off (R reaches 0)"),
+    "hops": ("#f2b134", "hops (lifts off, lands, goes on to the end)"),
+    "lift_off": ("#2f6db5", "lift-off ends the run (stop, or a pivot that cannot fly)"),
     "at_release": ("#9ecae1", "invalid at release (R < 0 or axis below the floor at t = 0)"),
     "fallen": ("#c8423a", "fallen (axis reaches the floor)"),
+    "fallen_after_hops": ("#7b2a24", "fallen after hops"),
     "energy_drift": ("#8e44ad", "energy_drift (numerical)"),
     "non_finite": ("#000000", "non_finite (numerical)"),
     "out_of_steps": ("#999999", "out of steps"),
@@ -67,10 +72,27 @@ def _edges(centres):
     return np.concatenate([[2 * centres[0] - middle[0]], middle, [2 * centres[-1] - middle[-1]]])
 
 
+#: Columns that count or measure the hops: 0 means the tip never left the floor, shown as "none".
+HOP_COLUMNS = ("lift_offs", "landings", "max_hop_height")
+
+
+def shown_outcomes(rows):
+    """Each case's entry of OUTCOMES: its outcome, with the hops and the refusals at release apart."""
+    outcome = rows["outcome"].to_numpy(dtype=object)
+    hopped = rows["lift_offs"].to_numpy(dtype=float) > 0 if "lift_offs" in rows else np.zeros(len(rows), bool)
+    # A state the model refuses from the start (the floor would have to pull the tip at release)
+    # is told apart from a lift-off that the motion reaches.
+    at_release = (rows["end_time"].to_numpy(dtype=float) == 0.0) & np.isin(outcome, ["lift_off", "fallen"])
+    shown = np.where(at_release, "at_release", outcome)
+    shown = np.where(hopped & (outcome == "none"), "hops", shown)
+    return np.where(hopped & (outcome == "fallen"), "fallen_after_hops", shown)
+
+
 def plot(rows, x, y, path, title=None, value="event_time"):
     """Writes a PNG of two panels over (x, y): the outcome of each case, and `value`, a numeric
     column of the rows (default the time of its event; cases without a value in grey; e.g.
-    final_tilt shows how friction raises or lowers the axis). A grid design is drawn as cells, a
+    final_tilt shows how friction raises or lowers the axis, max_hop_height or lift_offs the hops,
+    grey where the tip never left the floor). A grid design is drawn as cells, a
     random or Sobol one as points. Where x or y is initial/spin and the other keys of the threshold are fixed, the
     sleeping-top threshold +-omega_crit is drawn as a line on both panels."""
     import matplotlib
@@ -86,14 +108,13 @@ def plot(rows, x, y, path, title=None, value="event_time"):
     base = rows.attrs.get("base", {})
     duration = rows.attrs.get("duration")
     names = list(OUTCOMES)
-    # A state the model refuses from the start (the floor would have to pull the tip at release)
-    # is told apart from a lift-off that the motion reaches.
-    shown = np.where((rows["end_time"] == 0.0) & rows["outcome"].isin(["lift_off", "fallen"]), "at_release",
-                     rows["outcome"])
+    shown = shown_outcomes(rows)
     codes = np.array([names.index(o) if o in OUTCOMES else names.index("refused") for o in shown], float)
     if value not in rows or rows[value].dtype.kind not in "fiub":
         raise ValueError(f"--value {value}: not a numeric column of the rows")
     shade = rows[value].to_numpy(dtype=float)
+    if value in HOP_COLUMNS:
+        shade = np.where(shade > 0, shade, np.nan)  # grey: the tip never left the floor
 
     fig, (left, right) = plt.subplots(1, 2, figsize=(13, 5.2), constrained_layout=True)
     outcome_map = ListedColormap([OUTCOMES[n][0] for n in names])
@@ -112,6 +133,8 @@ def plot(rows, x, y, path, title=None, value="event_time"):
         mesh = right.scatter(rows[x][~none], rows[y][~none], c=shade[~none], cmap="viridis", s=size, lw=0)
     if value == "event_time":
         label = "event time [s]" + (f" (grey: none within {duration:g} s)" if duration else "")
+    elif value in HOP_COLUMNS:
+        label = _label(value) + (" (grey: never left the floor)" if np.isnan(shade).any() else "")
     else:
         label = _label(value) + (" (grey: none)" if np.isnan(shade).any() else "")
     fig.colorbar(mesh, ax=right, label=label)

@@ -1,5 +1,5 @@
 """Parameter sweeps: many cases of one scene, each run by the C++ core to a duration or to its
-first event, one row per case (issue 11).
+first terminal event (a hop goes on: issue 18), one row per case (issue 11).
 
     import spinning_top as st
     from spinning_top import sweep
@@ -216,8 +216,8 @@ def main(argv=None):
     parser = argparse.ArgumentParser(
         prog="sweep",
         description="Runs a scene over a grid or a random or Sobol sample of its keys, one row per case "
-                    "(the outcome, event time, least R, largest tilt, energy balance, method), and draws a "
-                    "stability map. Each case runs in the C++ core to --duration or its first event.",
+                    "(the outcome, event time, least R, largest tilt, energy balance, the hops, method), and draws a "
+                    "stability map. Each case runs in the C++ core to --duration or its first terminal event (the tip's hops go on).",
         epilog="Example (the README's map): sweep --config config/fixed_tip.yaml --vary initial/spin=0:200:201 "
                "--vary initial/tilt=0:1.4:141 --output map.csv --plot map.png")
     parser.add_argument("--config", required=True, help="scene file (YAML), e.g. config/fixed_tip.yaml")
@@ -229,7 +229,7 @@ def main(argv=None):
     parser.add_argument("--cases", type=int, help="number of cases of a random or sobol design")
     parser.add_argument("--seed", type=int, default=0, help="seed of a random or sobol design (default 0)")
     parser.add_argument("--duration", type=float, default=DEFAULT_SETTINGS.duration,
-                        help="[s] each case runs to it or its first event (default %(default)g)")
+                        help="[s] each case runs to it or its first terminal event (default %(default)g)")
     parser.add_argument("--sample-rate", type=float, default=DEFAULT_SETTINGS.sample_rate,
                         help="[Hz] samples of a time-stepper's case for its extremes (default %(default)g; exact needs "
                              "none)")
@@ -238,7 +238,8 @@ def main(argv=None):
     parser.add_argument("--output", help="rows as .csv or .parquet (default: CSV on stdout)")
     parser.add_argument("--plot", help="stability map as PNG (outcome and event time over --x and --y)")
     parser.add_argument("--value", default="event_time",
-                        help="numeric column shown in the map's second panel (default event_time; e.g. final_tilt)")
+                        help="numeric column shown in the map's second panel (default event_time; e.g. final_tilt, "
+                             "max_hop_height, lift_offs)")
     parser.add_argument("--x", help="key on the map's x axis (default: the first --vary)")
     parser.add_argument("--y", help="key on the map's y axis (default: the second --vary)")
     parser.add_argument("--scheduler", help="Dask scheduler address (tcp://host:8786); default: this machine's cores")
@@ -288,7 +289,9 @@ def main(argv=None):
 
         stability_map.plot(rows, x, y, args.plot, value=args.value)
     summary = rows["outcome"].value_counts().to_dict()
-    print(f"sweep: {len(rows)} cases: " + ", ".join(f"{v} {k}" for k, v in summary.items()), file=sys.stderr)
+    hopped = int((rows["lift_offs"] > 0).sum())
+    print(f"sweep: {len(rows)} cases: " + ", ".join(f"{v} {k}" for k, v in summary.items()) +
+          (f"; the tip left the floor in {hopped}" if hopped else ""), file=sys.stderr)
     return 0
 
 

@@ -128,3 +128,30 @@ def test_dask_local_cluster_gives_the_local_rows_bit_for_bit():
     faulthandler.cancel_dump_traceback_later()
     pd.testing.assert_frame_equal(local, remote, check_exact=True)
     assert local.to_csv(index=False) == remote.to_csv(index=False)
+
+
+def test_hops_are_rows_and_a_map(tmp_path):
+    # The toy top on its pivot launched with a precession (the README's lift-off map). Upright, or
+    # without precession, it stays on the floor. Tilted 1 rad: at -40 rad/s R < 0 at the release,
+    # and it flies from t = 0 and hops; at +40 rad/s R reaches 0 at 15.5 ms where the free tip
+    # would not rise, and a pivot that may neither push nor let go ends the run (HYBRID.md).
+    from spinning_top import stability_map
+    base = {"scene": "fixed_tip", "initial/spin": 150.0}
+    cases = sweep.design({"initial/precession_rate": [-40.0, 0.0, 40.0], "initial/tilt": [0.1, 1.0]})
+    rows = sweep.run(base, cases, duration=1.0)
+    hopped = rows["lift_offs"] > 0
+    assert list(hopped) == [False, True, False, False, False, False]
+    assert list(rows["outcome"]) == ["none"] * 5 + ["lift_off"]
+    assert rows["first_lift_off_time"][1] == 0.0 and rows["landings"][1] >= 1 and rows["max_hop_height"][1] > 1e-3
+    assert (rows["max_hop_height"][~hopped] == 0).all() and (rows["landings"][~hopped] == 0).all()
+    assert rows["first_lift_off_time"][5] == rows["event_time"][5] == pytest.approx(0.0155, abs=1e-4)
+    assert rows["first_lift_off_time"][[0, 2, 3, 4]].isna().all()
+    # after_lift_off stop: the same lift-offs end the runs, none counted as a hop.
+    stopped = sweep.run({**base, "after_lift_off": "stop"}, cases, duration=1.0)
+    assert list(stopped["outcome"]) == ["none", "lift_off", "none", "none", "none", "lift_off"]
+    assert (stopped["lift_offs"] == 0).all()
+    np.testing.assert_array_equal(stopped["event_time"][[1, 5]], rows["first_lift_off_time"][[1, 5]])
+    assert list(stability_map.shown_outcomes(rows)) == ["none", "hops", "none", "none", "none", "lift_off"]
+    assert list(stability_map.shown_outcomes(stopped))[1] == "at_release"
+    stability_map.plot(rows, "initial/precession_rate", "initial/tilt", tmp_path / "hops.png", value="max_hop_height")
+    assert (tmp_path / "hops.png").read_bytes()[:4] == b"\x89PNG"
