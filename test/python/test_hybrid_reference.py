@@ -313,9 +313,7 @@ def test_the_highest_hop_is_the_references(figures):
     assert row["landings"] == [e for e, _ in figures["transitions"]].count("landing")
 
 
-@pytest.mark.xfail(strict=True, reason="core (src/hybrid_simulator.hpp, after_floor_event): at k = 0 a viscous "
-                   "lift-off skims for zero time, giving a lift_off row in phase skim and a take_off row at the "
-                   "same instant, where HYBRID.md says flight (the floor's force is R alone)")
+# HYBRID.md: where the floor's force is R alone the tip flies (no skim, not even one of zero length).
 def test_without_friction_a_viscous_lift_off_is_a_flight(simulate):
     _, rows = simulate_rows(simulate, CASES["viscous_k0"], 0.02, RATE)
     lift_off = rows["event"] == "lift_off"
