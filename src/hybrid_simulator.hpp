@@ -37,6 +37,7 @@ class HybridSimulator final : public Simulator {
 
   explicit HybridSimulator(const SceneConfig& config) : config_(config), contact_(make_contact_phase<Model>(config)) {
     time_ = contact_->time();
+    settle_start();
   }
 
   using Simulator::advance_to;
@@ -63,7 +64,22 @@ class HybridSimulator final : public Simulator {
         continue;
       }
       if (t <= time_) return Event::kNone;
-      const Flight::Touch touch = flight_.search_until(t);
+      // The search for the touch is the flight's work: each of its steps counts against the budget
+      // (and the deadline), as an integration step does.
+      const WorkBudget flight_budget = left();
+      BudgetMeter meter(flight_budget);
+      long searched = 0;
+      const Flight::Touch touch = flight_.search_until(t, [&] {
+        if (!meter.allows_step()) return false;
+        ++searched;
+        return true;
+      });
+      used += searched;
+      finished_steps_ += searched;
+      if (touch.out_of_budget) {
+        time_ = std::max(time_, flight_.searched_until());
+        return Event::kNone;
+      }
       if (touch.event == Event::kNone) {
         time_ = t;
         return Event::kNone;
@@ -107,6 +123,7 @@ class HybridSimulator final : public Simulator {
     impact_loss_ = 0.0;
     flight_work_ = 0.0;
     left_contact_ = false;
+    settle_start();
     const IntegratorChoice now = integrator_choice();
     return now.method != before.method || now.fallback != before.fallback;
   }
@@ -146,6 +163,17 @@ class HybridSimulator final : public Simulator {
   Phase phase() const override { return phase_; }
 
  private:
+  /// A start that is already an event: R < 0 at release lifts off at once (the snapshot at t = 0
+  /// is then the flight's or the skim's, never a contact state with R < 0); any other ends the run.
+  void settle_start() {
+    const Event at_start = contact_->event();
+    if (at_start == Event::kLiftOff) {
+      after_floor_event();
+    } else if (at_start != Event::kNone) {
+      end(at_start);
+    }
+  }
+
   /// The first key an update changes (for its refusal's message).
   std::string changed_key(const TopParameters& top, const IntegratorSettings& integrator) const {
     const TopParameters& p = config_.top;
@@ -175,9 +203,12 @@ class HybridSimulator final : public Simulator {
 
   /// A transition's row; it counts as one step (the work budget bounds a chain of them).
   void record(Event event) {
+    // A caller that never takes them (advance_to alone) keeps the newest kMaxPending.
+    if (transitions_.size() >= kMaxPending) transitions_.erase(transitions_.begin(), transitions_.begin() + kMaxPending / 2);
     transitions_.push_back({event, snapshot()});
     ++finished_steps_;
   }
+  static constexpr std::size_t kMaxPending = 1 << 14;
 
   /// The state of the free top at a contact phase's state (its outputs, shifted to where the
   /// phase's model stands).

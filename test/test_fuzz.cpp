@@ -16,9 +16,9 @@ TEST(Fuzz, RandomConfigurationsStatesAndLiveUpdatesKeepEveryPromise) {
   fuzz::Tally t;
   for (int seed = 1; seed <= kCases; ++seed) t.add(fuzz::Case(static_cast<unsigned long long>(seed)).run(limits), seed);
   std::printf("[ measured ] %d cases: %ld ran (%ld out of budget), %ld refused; %ld updates applied, %ld refused; "
-              "%ld resets; %.1f s wall, slowest case %.2f s\n",
+              "%ld resets; %.1f s wall, slowest case %.2f s (seed %llu)\n",
               kCases, t.ran, t.out_of_budget, t.cases - t.ran, t.updates_applied, t.updates_refused, t.resets, t.wall,
-              t.slowest);
+              t.slowest, t.slowest_seed);
   std::printf("[ measured ] worst | |q| - 1 | = %.3g, worst energy balance drift = %.3g of the allowed\n",
               t.worst_norm_error, t.worst_balance);
   for (const auto& kv : t.events) std::printf("[ measured ] ended by %-12s %ld\n", kv.first.c_str(), kv.second);

@@ -233,6 +233,8 @@ TEST(HybridRun, HopsWithTransitionsLocatedToRoundOff) {
                 to_string(rows.back().event));
     EXPECT_GE(lift_offs, 10);
     EXPECT_GE(landings, 10);
+    // Viscous: friction holds R down at the lift-off (R0 > 0 > R1): the tip skims, then takes off.
+    if (scene == SceneType::kViscous) EXPECT_GE(take_offs, 10);
     EXPECT_GE(at_once, 1);
     EXPECT_LT(worst_height, 1e-15);
     EXPECT_GE(worst_force, 0.0);
@@ -387,7 +389,9 @@ TEST(HybridRun, FrictionlessHopsStayClosedFormPiecewise) {
   EXPECT_GE(hops.landings, 10);
   EXPECT_EQ(choice.method, IntegratorType::kExact);
   EXPECT_FALSE(choice.fallback);
-  EXPECT_LE(simulator->steps(), 3 * (hops.lift_offs + hops.landings) + 2);
+  // One step per exact contact phase and per transition, and the flights' search for their touch
+  // (a few tens of its bounded steps per hop).
+  EXPECT_LE(simulator->steps(), 100 * hops.landings);
   EXPECT_GT(hops.max_hop_height, 0.0);
   EXPECT_NEAR(hops.first_lift_off_time, 0.00935, 1e-4);
 }

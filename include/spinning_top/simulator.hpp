@@ -198,7 +198,8 @@ class Simulator {
   /// Accepted integration steps since the last reset (a cost measure; a transition counts one).
   virtual long steps() const = 0;
   /// The transitions passed since the last call (or reset), in time order, each with its state:
-  /// what the front ends show as rows or event messages between their requested times.
+  /// what the front ends show as rows or event messages between their requested times. At most
+  /// the newest 16384 are kept for a caller that does not take them.
   virtual std::vector<Transition> take_transitions() = 0;
   /// The hops so far (since the last reset).
   virtual HopSummary hops() const = 0;

@@ -46,6 +46,7 @@ class Flight {
   struct Touch {
     Event event = Event::kNone;  ///< kLanding (the tip) or kFallen (the rim first)
     double time = std::numeric_limits<double>::infinity();
+    bool out_of_budget = false;  ///< the search stopped at its work budget, before t
   };
 
   Flight() = default;
@@ -71,6 +72,8 @@ class Flight {
       s1_ = n.cross(axis).z();
     }
     curvature_bound_ = p.gravity + p.tip_distance * rate_ * rate_ * std::hypot(c1_, s1_);
+    jerk_bound_ = p.tip_distance * rate_ * rate_ * rate_ * std::hypot(c1_, s1_);
+    if (!(p.rim_radius > 0.0)) needle_fall_ = first_horizontal_axis();
     // The rim can touch first only where it is below the tip: e_Zz < u_fall (a e_Zz - b sin < 0).
     rim_ = (p.rim_radius > 0.0 || p.rim_distance > 0.0) && u0_ - 2.0 * std::hypot(c1_, s1_) < p.fallen_vertical();
     scanned_ = 0.0;
@@ -115,6 +118,11 @@ class Flight {
     const double half = std::sin(0.5 * x);
     return tip_.velocity + p_.tip_distance * rate_ * (2.0 * s1_ * half * half + c1_ * std::sin(x)) - p_.gravity * tau;
   }
+  /// d^2 z_P / dt^2 at t.
+  double tip_acceleration(double t) const {
+    const double x = rate_ * (t - t0_);
+    return p_.tip_distance * rate_ * rate_ * (s1_ * std::sin(x) + c1_ * std::cos(x)) - p_.gravity;
+  }
   /// The height of the body's lowest point on the rim (HYBRID.md): z_P + a e_Zz - b sqrt(1 - e_Zz^2).
   double rim_height(double t) const {
     const double u = axis_vertical(t);
@@ -126,10 +134,30 @@ class Flight {
   /// tau with z = z_P(tau) >= 0 and z' = z_P'(tau), z_P stays >= z + z' d - M d^2 / 2 > 0 for
   /// d < (z' + sqrt(z'^2 + 2 M z)) / M, so the step cannot pass a root. Near a root the steps are
   /// Newton's from the safe side and converge to it. Returns the touch at or before t, or none.
-  Touch search_until(double t) {
+  /// allows_step() is asked before each step of the search (a work budget); where it says no, the
+  /// search returns out_of_budget and goes on from the same point at the next call. The points the
+  /// search visits do not depend on t or on where a budget ran out, so neither does the touch.
+  template <class AllowsStep>
+  Touch search_until(double t, AllowsStep&& allows_step) {
     if (touch_.event != Event::kNone) return touch_.time <= t ? touch_ : Touch{};
-    double tau = scanned_;
-    const double end = t - t0_;
+    double end = t - t0_;
+    // A needle falls where its axis reaches the horizontal (the seed's rule, in flight too), unless
+    // the tip lands first: search up to there.
+    const bool needle_falls = needle_fall_ <= end;
+    if (needle_falls) end = needle_fall_;
+    const Touch touch = search(scanned_, end, t0_ + end, allows_step);
+    if (touch.event != Event::kNone || touch.out_of_budget || !needle_falls) return touch;
+    return found(Event::kFallen, needle_fall_);
+  }
+  Touch search_until(double t) {
+    return search_until(t, [] { return true; });
+  }
+  /// The time up to which the search has shown the flight free of the floor.
+  double searched_until() const { return t0_ + scanned_; }
+
+ private:
+  template <class AllowsStep>
+  Touch search(double tau, double end, double t, AllowsStep& allows_step) {
     if (!(end > tau)) return Touch{};
     if (tau == 0.0 && tip_.height <= 0.0 && tip_.velocity <= 0.0) {
       // A lift-off: z_P = z_P' = 0 at the start, and z_P rises as a_f tau^2 / 2 or, on the
@@ -142,35 +170,61 @@ class Flight {
         touch_ = {Event::kLanding, t0_};
         return touch_;
       }
-      if (tau >= end) {
-        scanned_ = std::min(tau, end);
-        return Touch{};
-      }
+      scanned_ = last_tau_ = tau;  // where every later search goes on
+      if (tau >= end) return Touch{};
     }
     const double rim_step = rim_ && rate_ > 0.0 ? (2.0 * M_PI / rate_) / 32.0 : std::numeric_limits<double>::infinity();
-    for (int iteration = 0; iteration < 100000000; ++iteration) {
+    for (;;) {
+      if (!allows_step()) {
+        scanned_ = tau;
+        Touch none;
+        none.out_of_budget = true;
+        return none;
+      }
+      if (!rim_) {
+        // Jump over what can hold neither a touch nor the apex (a fast spin's wobble makes M
+        // large and the bounded steps short): see skip_from().
+        const double next = skip_from(tau);
+        if (next > tau) {
+          if (next >= end) {
+            scanned_ = tau;
+            max_tip_height_ = std::max(max_tip_height_, tip_height(t));  // a flight still rising at t
+            return Touch{};
+          }
+          tau = next;
+        }
+      }
       const double z = tip_height(t0_ + tau), zp = tip_velocity(t0_ + tau);
       max_tip_height_ = std::max(max_tip_height_, z);
       if (rim_ && rim_height(t0_ + tau) <= 0.0) return found(Event::kFallen, locate_rim(last_tau_, tau));
       if (z <= 0.0 && tau > 0.0) return found(Event::kLanding, tau);
       double d = curvature_bound_ > 0.0 ? (zp + std::sqrt(std::max(0.0, zp * zp + 2.0 * curvature_bound_ * z))) / curvature_bound_
                                         : (zp < 0.0 ? z / -zp : std::numeric_limits<double>::infinity());
+      if (zp > 0.0) {
+        // While the tip rises it cannot touch: z_P' >= z' + z'' d - J d^2 / 2 > 0 over the step,
+        // J = h rho Omega^3 >= |z_P'''|. Near a lift-off (z, z' ~ 0 while M >> z'') this step grows
+        // with tau where the curvature bound's would stay at ~z' / M.
+        const double zpp = tip_acceleration(t0_ + tau);
+        const double rising = jerk_bound_ > 0.0 ? (zpp + std::sqrt(std::max(0.0, zpp * zpp + 2.0 * jerk_bound_ * zp))) / jerk_bound_
+                                                : (zpp < 0.0 ? zp / -zpp : std::numeric_limits<double>::infinity());
+        d = std::max(d, rising);
+      }
       d = std::min(d, rim_step);
       const double next = tau + d;
       if (!(next > tau)) return found(Event::kLanding, tau);  // converged onto the root from its safe side
-      if (zp > 0.0 && tip_velocity(t0_ + std::min(next, end)) <= 0.0) apex(tau, std::min(next, end));
       if (next >= end) {
-        last_tau_ = tau;
-        scanned_ = end;
+        scanned_ = tau;
         if (rim_ && rim_height(t) <= 0.0) return found(Event::kFallen, locate_rim(tau, end));
         return Touch{};
       }
+      if (zp > 0.0 && tip_velocity(t0_ + next) <= 0.0) apex(tau, next);
       last_tau_ = tau;
       tau = next;
     }
-    return Touch{};
   }
 
+
+ public:
   /// True if the search found that the tip cannot rise off the floor (a lift-off whose free tip
   /// does not move up within 1 ms): the flight is not a motion.
   bool cannot_rise() const { return cannot_rise_; }
@@ -193,6 +247,50 @@ class Flight {
   }
 
  private:
+  /// The tip height is a parabola less a sinusoid, z_P = Q(tau) - h rho cos(Omega tau - delta) with
+  ///   Q(tau) = z_P0 + h c1 + (v_P0 + h s1 Omega) tau - g tau^2 / 2,  rho = sqrt(c1^2 + s1^2),
+  /// so Q - h rho <= z_P <= Q + h rho. Where Q - h rho > 0 no touch can be; the highest point lies
+  /// where Q >= max Q - 2 h rho (outside, z_P < max Q - h rho <= z_P at Q's vertex). Returns the
+  /// tau to go on from: past a stretch that holds neither (the next place either can be), or tau.
+  double skip_from(double tau) const {
+    const double wobble = p_.tip_distance * std::hypot(c1_, s1_);
+    const double a = tip_.height + p_.tip_distance * c1_, b = tip_.velocity + p_.tip_distance * s1_ * rate_;
+    const double g = p_.gravity;
+    const double q = a + b * tau - 0.5 * g * tau * tau;
+    // A margin for the rounding of Q against tip_height's own (both are sums of terms below a few
+    // times |a| + |b tau| + g tau^2 / 2 + h).
+    const double margin = 1e-12 * (std::abs(a) + std::abs(b * tau) + 0.5 * g * tau * tau + p_.tip_distance);
+    if (!(q - wobble > 2.0 * margin)) return tau;
+    if (g == 0.0) {
+      if (b >= 0.0) return std::numeric_limits<double>::infinity();  // rises for ever: no touch, highest at the end
+      return tau + (q - wobble - margin) / -b;
+    }
+    const double vertex = b / g, half_window = std::sqrt(4.0 * wobble / g);
+    if (tau < vertex - half_window) return vertex - half_window;  // up to the apex's window
+    if (tau <= vertex + half_window) return tau;                   // in it: step
+    // Past it: to where Q - h rho comes down to the margin, the larger root of Q = h rho + margin.
+    const double c = a - wobble - margin;
+    return (b + std::sqrt(std::max(0.0, b * b + 2.0 * g * c))) / g;
+  }
+
+  /// The first tau at which e_Zz = (u0 - c1) + rho cos(Omega tau - delta) comes down to 0, its
+  /// last tau with e_Zz > 0 in the state at() reports (backed off by ulps), or infinity.
+  double first_horizontal_axis() const {
+    const double rho = std::hypot(c1_, s1_), middle = u0_ - c1_;
+    if (!(rho > 0.0 && rate_ > 0.0) || middle - rho > 0.0) return std::numeric_limits<double>::infinity();
+    double x = std::atan2(s1_, c1_) + std::acos(std::clamp(-middle / rho, -1.0, 1.0));  // the falling branch
+    x = std::fmod(x, 2.0 * M_PI);
+    if (x < 0.0) x += 2.0 * M_PI;
+    double tau = x / rate_, back = std::max(tau, 1e-300) * 2.2e-16;
+    // e_Zz as the contact models compute it (vertical_in_body), so that no front end reads it <= 0.
+    auto vertical = [&](double at) {
+      const Quaternion q = this->at(t0_ + at).attitude;
+      return 1.0 - 2.0 * (q.x() * q.x() + q.y() * q.y());
+    };
+    for (int i = 0; i < 64 && tau > 0.0 && !(vertical(tau) > 0.0); ++i, back *= 2.0) tau = std::max(0.0, tau - back);
+    return tau;
+  }
+
   static TipStart tip_of(const TopParameters& p, const FreeBody& s) {
     const Vector3 axis = s.attitude * Vector3::UnitZ();
     const Vector3 r = -p.tip_distance * axis;
@@ -243,12 +341,13 @@ class Flight {
   double a_ = 1.0, spin_ = 0.0, body_rate_ = 0.0;
   Vector3 momentum_ = Vector3::Zero();
   double rate_ = 0.0, u0_ = 1.0, c1_ = 0.0, s1_ = 0.0;
-  double curvature_bound_ = 0.0;
+  double curvature_bound_ = 0.0, jerk_bound_ = 0.0;  ///< M >= |z_P''|, J >= |z_P'''|
   bool rim_ = false;
   double scanned_ = 0.0, last_tau_ = 0.0;
   Touch touch_;
   bool cannot_rise_ = false;
   double max_tip_height_ = 0.0;
+  double needle_fall_ = std::numeric_limits<double>::infinity();  ///< tau where a needle's axis is horizontal
 };
 
 }  // namespace spinning_top

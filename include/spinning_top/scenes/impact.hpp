@@ -67,7 +67,11 @@ inline Landing land(const TopParameters& p, const FreeBody& before, TangentialIm
   const Vector3 omega_after = omega + inverse_inertia * r.cross(impulse);
   const Vector3 body = before.attitude.conjugate() * omega_after;
   landing.after.body_rates = Vector3(body.x(), body.y(), before.body_rates.z());
-  landing.kinetic_energy_loss = std::max(0.0, kinetic_energy(p, before) - kinetic_energy(p, landing.after));
+  // T- - T+ as the impulse's work, -J . (v_P- + v_P+) / 2 (Kelvin's theorem for impulsive
+  // motion; Routh, Dynamics of a System of Rigid Bodies, sec. 331): the difference of the two
+  // kinetic energies would cancel the spin's C wZ^2 / 2, often 1e10 times the loss.
+  const Vector3 tip_after = landing.after.velocity + omega_after.cross(r);
+  landing.kinetic_energy_loss = std::max(0.0, -0.5 * impulse.dot(tip_velocity + tip_after));
   return landing;
 }
 

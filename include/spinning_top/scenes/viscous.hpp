@@ -46,7 +46,8 @@ class Viscous {
 
   /// R without friction and with full friction at y (the lift-off rule and the skim's ends).
   Vector2 normal_force_range(const State& y) const {
-    const Evaluation e = evaluate(y);
+    const Viscous skimming(parameters_, initial_, true);  // evaluate() finds both only while skimming
+    const Evaluation e = skimming.evaluate(y);
     return Vector2(e.frictionless_normal_force, e.full_friction_normal_force);
   }
 
