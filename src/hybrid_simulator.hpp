@@ -96,6 +96,12 @@ class HybridSimulator final : public Simulator {
   Snapshot snapshot() const override {
     if (phase_ == Phase::kFlight) return flight_snapshot(flight_.at(time_));
     Snapshot s = contact_->snapshot();
+    if (contact_->event() == Event::kLiftOff && s.outputs.normal_force < 0.0) {
+      // A contact phase that starts where its R < 0 (after a landing, or a skim's end under stiff
+      // friction) lifts off at that instant: the floor cannot pull, so what it exerts there is 0.
+      s.outputs.normal_force = 0.0;
+      s.outputs.contact_force = Vector3::Zero();
+    }
     s.outputs.center_of_mass.head<2>() += offset_;
     s.outputs.contact_point.head<2>() += offset_;
     s.outputs.dissipated_energy += impact_loss_;
@@ -123,6 +129,8 @@ class HybridSimulator final : public Simulator {
     impact_loss_ = 0.0;
     flight_work_ = 0.0;
     left_contact_ = false;
+    same_instant_ = 0;
+    last_transition_time_ = -1.0;
     settle_start();
     const IntegratorChoice now = integrator_choice();
     return now.method != before.method || now.fallback != before.fallback;
@@ -203,12 +211,24 @@ class HybridSimulator final : public Simulator {
 
   /// A transition's row; it counts as one step (the work budget bounds a chain of them).
   void record(Event event) {
+    // Transitions at one instant: a landing and its lift-off, a lift-off and its take-off, a skim's
+    // end. More than kChatter of them means the floor can neither hold the tip nor let it go (a
+    // stiff friction's R flipping sign with the state's last bit): the run ends with lift_off.
+    same_instant_ = last_transition_time_ == time_ ? same_instant_ + 1 : 0;
+    last_transition_time_ = time_;
+    if (same_instant_ > kChatter) {
+      end(Event::kLiftOff);
+      return;
+    }
     // A caller that never takes them (advance_to alone) keeps the newest kMaxPending.
     if (transitions_.size() >= kMaxPending) transitions_.erase(transitions_.begin(), transitions_.begin() + kMaxPending / 2);
     transitions_.push_back({event, snapshot()});
     ++finished_steps_;
   }
   static constexpr std::size_t kMaxPending = 1 << 14;
+  static constexpr int kChatter = 8;
+  int same_instant_ = 0;
+  double last_transition_time_ = -1.0;
 
   /// The state of the free top at a contact phase's state (its outputs, shifted to where the
   /// phase's model stands).

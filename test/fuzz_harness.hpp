@@ -213,7 +213,7 @@ class Case {
       fail(outcome, "non-finite snapshot at t = " + number(s.time));
       return;
     }
-    const std::string where = " at t = " + number(s.time) + (simulator.event() == Event::kNone ? "" : std::string(" (event ") + to_string(simulator.event()) + ")") + ", " + simulator.integrator_description();
+    const std::string where = " at t = " + number(s.time) + " in " + to_string(s.phase) + (simulator.event() == Event::kNone ? "" : std::string(" (event ") + to_string(simulator.event()) + ")") + ", " + simulator.integrator_description();
     const double norm_error = std::abs(s.attitude.norm() - 1.0);
     outcome.worst_norm_error = std::max(outcome.worst_norm_error, norm_error);
     if (norm_error > 1e-12) fail(outcome, "| |q| - 1 | = " + number(norm_error) + where);

@@ -234,7 +234,9 @@ TEST(HybridRun, HopsWithTransitionsLocatedToRoundOff) {
     EXPECT_GE(lift_offs, 10);
     EXPECT_GE(landings, 10);
     // Viscous: friction holds R down at the lift-off (R0 > 0 > R1): the tip skims, then takes off.
-    if (scene == SceneType::kViscous) EXPECT_GE(take_offs, 10);
+    if (scene == SceneType::kViscous) {
+      EXPECT_GE(take_offs, 10);
+    }
     EXPECT_GE(at_once, 1);
     EXPECT_LT(worst_height, 1e-15);
     EXPECT_GE(worst_force, 0.0);
