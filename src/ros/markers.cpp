@@ -105,9 +105,11 @@ visualization_msgs::MarkerArray top_markers(const TopParameters& top, const Vect
   if (trace.points.size() < 2) trace.points.push_back(trace.points.back());
   array.markers.push_back(trace);
 
-  // The floor's force on the tip, from the tip (world frame, force_scale m/N).
+  // The floor's force on the tip, from the tip (world frame, force_scale m/N); none in flight
+  // or at rest (rviz would draw a zero-length arrow as a stray head).
   visualization_msgs::Marker arrow = trace;
   arrow.ns = "force";
+  if (force == Vector3::Zero()) arrow.action = visualization_msgs::Marker::DELETE;
   arrow.type = visualization_msgs::Marker::ARROW;
   arrow.points.clear();
   arrow.points.push_back(to_point(contact_point));
