@@ -1,5 +1,5 @@
-// What rviz draws of a top: its body (a cone with the top's C/A), a handle, the tip's trace on
-// the floor and the floor's force as an arrow.
+// What rviz draws of a top: its body (a cone from the tip to the rim, or with the top's C/A
+// without a rim), a handle, the tip's trace and the floor's force as an arrow.
 #pragma once
 
 #include <ros/time.h>
