@@ -380,7 +380,7 @@ double pendulum_fall_time() {
 }
 
 TEST_F(SimulateTest, TopWithoutSpinFallsAndTheLastRowSaysSo) {
-  // A needle (no rim: the pendulum falls until its axis reaches the floor).
+  // The needle (no rim): the scene file's rim would touch the floor at 0.857 rad, before the axis.
   const Result r = simulate({"--config", kFixedTipYaml, "--set", "initial/spin=0", "--set", "rim_radius=0", "--set",
                              "rim_distance=0", "--duration", "2"});
   ASSERT_EQ(r.exit_code, 0) << r.err;  // an event ends the run early, still a success

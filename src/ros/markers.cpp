@@ -19,8 +19,11 @@ std_msgs::ColorRGBA color(float r, float g, float b, float a = 1.0f) {
   return c;
 }
 
-/// The body drawn by rviz: a solid cone with its apex at the tip and its centroid at G
-/// (height H = 4h/3, since a cone's centroid lies 3/4 of the way from the apex), whose
+/// The body drawn by rviz: a solid cone with its apex at the tip. With a rim (rim_radius b > 0)
+/// it is the body the core knows (HYBRID.md, "fallen"): its base circle is the rim, radius b at
+/// distance a = rim_distance from the tip along the axis, so a fallen top lies on the floor
+/// where the core says its rim touches it. Without one (a needle to the core), the cone whose
+/// centroid is at G (height H = 4h/3, since a cone's centroid lies 3/4 of the way from the apex), whose
 /// inertia ratio C/A about G is the top's: for a cone C = 3/10 m R^2 and
 /// A = 3/20 m R^2 + 3/80 m H^2, so C/A = rho gives R^2 = rho H^2 / (4 (2 - rho)).
 /// A real top is denser at the rim, so this is the shape, not the mass distribution.
@@ -31,6 +34,7 @@ struct BodyShape {
 };
 
 BodyShape body_shape(const TopParameters& top) {
+  if (top.rim_radius > 0.0) return {top.rim_distance, top.rim_radius};  // validated: a > 0 with b > 0
   const double height = 4.0 * top.tip_distance / 3.0;
   const double rho = top.inertia_axial / top.inertia_transverse;
   double radius = rho < 2.0 ? 0.5 * height * std::sqrt(rho / (2.0 - rho)) : 2.0 * height;
@@ -105,9 +109,11 @@ visualization_msgs::MarkerArray top_markers(const TopParameters& top, const Vect
   if (trace.points.size() < 2) trace.points.push_back(trace.points.back());
   array.markers.push_back(trace);
 
-  // The floor's force on the tip, from the tip (world frame, force_scale m/N).
+  // The floor's force on the tip, from the tip (world frame, force_scale m/N); none in flight
+  // or at rest (rviz would draw a zero-length arrow as a stray head).
   visualization_msgs::Marker arrow = trace;
   arrow.ns = "force";
+  if (force == Vector3::Zero()) arrow.action = visualization_msgs::Marker::DELETE;
   arrow.type = visualization_msgs::Marker::ARROW;
   arrow.points.clear();
   arrow.points.push_back(to_point(contact_point));

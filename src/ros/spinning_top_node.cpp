@@ -63,6 +63,13 @@ void warn_about_unknown_keys(const ros::NodeHandle& private_nh, const std::vecto
   }
 }
 
+/// The first changed live key that a top keeps (what a refusal of the change names).
+std::string first_changed_key(const SpinningTopConfig& config, const SpinningTopConfig& old) {
+  for (const LiveKey& key : live_keys())
+    if (key.in_top != nullptr && config.*key.field != old.*key.field) return key.name;
+  return "gravity";
+}
+
 /// The reason of an InvalidParameter without its "key: " prefix.
 std::string reason_of(const InvalidParameter& error) {
   const std::string what = error.what();
@@ -106,7 +113,7 @@ SpinningTopNode::SpinningTopNode(ros::NodeHandle nh, ros::NodeHandle private_nh)
 
   for (std::size_t i = 0; i < configs.size(); ++i)
     add_top(std::make_unique<TopInstance>(configs[i].first, configs[i].second, positions[i], settings_, private_nh_,
-                                          clock_.time()));
+                                          clock_.time(), stamp_of()));
 
   reset_service_ = private_nh_.advertiseService("reset", &SpinningTopNode::on_reset, this);
   reload_service_ = private_nh_.advertiseService("reload", &SpinningTopNode::on_reload, this);
@@ -419,6 +426,7 @@ void SpinningTopNode::reconfigure(SpinningTopConfig& config, uint32_t /*level*/)
           throw InvalidParameter(config.spin != old.spin ? "spin" : "mass",
                                  std::string("top '") + top->name() + "' stopped at its " + to_string(top->event()) +
                                      " event: reset it before changing its body");
+        top->require_on_the_floor(first_changed_key(config, old));
       } catch (const InvalidParameter& error) {
         return refuse(std::string(error.what()) + (top->name().empty() ? "" : " (top " + top->name() + ")"));
       }
@@ -582,7 +590,7 @@ bool SpinningTopNode::on_spawn(Spawn::Request& request, Spawn::Response& respons
     }
     const SceneConfig config = parse_scene_config(keys, /*require_all=*/false);
     add_top(std::make_unique<TopInstance>(request.name, config, Eigen::Vector2d(request.x, request.y), settings_,
-                                          private_nh_, clock_.time()));
+                                          private_nh_, clock_.time(), stamp_of()));
   } catch (const InvalidParameter& error) {
     response.message = std::string("spawn refused: ") + error.what();
     ROS_WARN("spinning_top: %s", response.message.c_str());

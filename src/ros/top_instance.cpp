@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "spinning_top/TopEvent.h"
 #include "spinning_top/TopState.h"
 #include "spinning_top/kinematics.hpp"
 #include "spinning_top/ros/conversions.hpp"
@@ -32,31 +33,50 @@ struct Monitors {
   double energy_balance, quaternion_norm_error, constraint_residual;
 };
 
-Monitors monitors(const Snapshot& s, const SceneConfig& config, double energy_baseline) {
+/// `pivot`: where a fixed tip pivots (the core's frame).
+Monitors monitors(const Snapshot& s, const SceneConfig& config, double energy_baseline, const Vector3& pivot) {
   const ModelOutputs& out = s.outputs;
   Monitors m;
-  // Energy balance E + W - E0 (W: work done against friction; 0 without friction).
+  // Energy balance E + W - E0 (W: work against friction and the energy lost in landings).
   m.energy_balance = (out.energy + out.dissipated_energy - energy_baseline) / std::max(std::abs(energy_baseline), 1e-300);
   m.quaternion_norm_error = std::abs(s.attitude.norm() - 1.0);
-  // Contact constraint z_G = h e_Zz (PHYSICS.md), and the pivot at the origin (fixed tip).
+  // The tip P = G - h e_Z, whose height the core reports as the contact point's z (0 on the
+  // floor); on the floor also the contact constraint z_P = 0 (PHYSICS.md) and, for a fixed tip,
+  // P at its pivot. In flight P is free: only the first holds.
   const Vector3 axis = s.attitude * Vector3::UnitZ();
-  double constraint = std::abs(out.center_of_mass.z() - config.top.tip_distance * axis.z());
-  constraint = std::max(constraint, std::abs(out.contact_point.z()));
-  if (config.scene == SceneType::kFixedTip) constraint = std::max(constraint, out.contact_point.head<2>().norm());
+  double constraint = std::abs(out.center_of_mass.z() - config.top.tip_distance * axis.z() - out.contact_point.z());
+  if (s.phase != Phase::kFlight) {
+    constraint = std::max(constraint, std::abs(out.contact_point.z()));
+    if (config.scene == SceneType::kFixedTip)
+      constraint = std::max(constraint, (out.contact_point.head<2>() - pivot.head<2>()).norm());
+  }
   m.constraint_residual = constraint;
   return m;
 }
 
 std::string event_name(Event event) { return event == Event::kNone ? "" : to_string(event); }
 
+/// A top whose run has ended, as the topics show it: where it stopped, at rest. The core's last
+/// state still moves (a fall is located while the top swings down, a flight ends at the rim's
+/// touch); publishing its rates and forces for ever would show a top frozen in mid-motion.
+Snapshot at_rest(Snapshot s) {
+  s.body_rates.setZero();
+  s.outputs.center_of_mass_velocity.setZero();
+  s.outputs.normal_force = 0.0;
+  s.outputs.contact_force.setZero();
+  return s;
+}
+
 }  // namespace
 
 TopInstance::TopInstance(std::string name, const SceneConfig& config, const Eigen::Vector2d& tip_xy,
-                         const NodeSettings& settings, ros::NodeHandle private_nh, double world_time)
+                         const NodeSettings& settings, ros::NodeHandle private_nh, double world_time,
+                         StampOf stamp_of)
     : name_(std::move(name)),
       settings_(settings),
       body_frame_(name_.empty() ? settings.body_frame : name_ + "/" + settings.body_frame),
       contact_frame_(name_.empty() ? settings.contact_frame : name_ + "/" + settings.contact_frame),
+      stamp_of_(std::move(stamp_of)),
       nh_(name_.empty() ? private_nh : ros::NodeHandle(private_nh, name_)) {
   restart(config, tip_xy, world_time);  // validates before anything is advertised
   contact_point_publisher_ = nh_.advertise<geometry_msgs::PointStamped>("contact_point", 100);
@@ -64,7 +84,10 @@ TopInstance::TopInstance(std::string name, const SceneConfig& config, const Eige
   twist_publisher_ = nh_.advertise<geometry_msgs::TwistStamped>("twist", 100);
   state_publisher_ = nh_.advertise<spinning_top::TopState>("state", 100);
   marker_publisher_ = nh_.advertise<visualization_msgs::MarkerArray>("markers", 10);
-  event_publisher_ = nh_.advertise<std_msgs::String>("event", 1, /*latch=*/true);
+  // Several events can come within one tick (a landing and the lift-off at the same instant):
+  // a queue, so that a subscriber gets each; latched, a late one gets the last.
+  event_publisher_ = nh_.advertise<std_msgs::String>("event", 100, /*latch=*/true);
+  event_stamped_publisher_ = nh_.advertise<spinning_top::TopEvent>("event_stamped", 100, /*latch=*/true);
   nh_.setParam("robot_description", top_urdf(start_config_.top, body_frame_));
 }
 
@@ -78,6 +101,7 @@ void TopInstance::start(const SceneConfig& config, double time_base, double worl
   time_base_ = time_base;
   origin_ = world_time;
   now_ = simulator_->snapshot();
+  pivot_ = now_.outputs.contact_point;
   rebaseline_energy();
 }
 
@@ -94,10 +118,7 @@ void TopInstance::restart(const SceneConfig& config, const Eigen::Vector2d& tip_
   start_tip_xy_ = tip_xy;
   place_tip_at(tip_xy);
   trace_.clear();
-  if (had_event) {
-    std_msgs::String cleared;  // "": no event (the core's spelling of none)
-    event_publisher_.publish(cleared);
-  }
+  if (had_event) publish_event("", now_, false);  // "": no event (the core's spelling of none)
 }
 
 void TopInstance::reset(double world_time) { restart(start_config_, start_tip_xy_, world_time); }
@@ -116,10 +137,19 @@ bool TopInstance::update(const TopParameters& top, const IntegratorSettings& int
   return switched;
 }
 
+void TopInstance::require_on_the_floor(const std::string& key) const {
+  const Phase phase = simulator_->phase();
+  if (phase != Phase::kContact)
+    throw InvalidParameter(key, std::string("cannot change while the tip is off the floor (") + to_string(phase) +
+                                    "); try again when it has landed");
+}
+
 void TopInstance::change_body(const TopParameters& top, double spin) {
   if (simulator_->event() != Event::kNone)
     throw InvalidParameter("mass", std::string("the top stopped at its ") + to_string(simulator_->event()) +
                                        " event: reset it before changing its body");
+  // A new contact model from a flying state would put the top back on the floor.
+  require_on_the_floor("mass");
   const Snapshot now = now_;
   const EulerState e = euler_state(now.attitude, now.body_rates);
   SceneConfig config = simulator_->config();
@@ -149,9 +179,16 @@ void TopInstance::change_body(const TopParameters& top, double spin) {
 }
 
 bool TopInstance::advance(double world_time, const WorkBudget& budget) {
-  if (simulator_->event() != Event::kNone) return true;  // stopped: the frozen pose goes on being published
+  if (simulator_->event() != Event::kNone) return true;  // stopped: the final pose goes on being published
   const double target = world_time - origin_;
   const Event event = simulator_->advance_to(target, budget);
+  // The transitions passed, also by a call that ran out of budget (the next one goes on after them).
+  for (const Transition& transition : simulator_->take_transitions()) {
+    if (transition.event == Event::kLanding) pivot_ = transition.state.outputs.contact_point;  // a fixed tip sticks there
+    ROS_DEBUG("spinning_top: %s%s at t = %.9g s (simulated), now %s", name_.empty() ? "" : (name_ + ": ").c_str(),
+              to_string(transition.event), time_base_ + transition.state.time, to_string(transition.state.phase));
+    publish_event(to_string(transition.event), transition.state, false);
+  }
   if (event == Event::kNone && simulator_->time() < target) return false;  // out of budget
   now_ = simulator_->snapshot();
   if (event != Event::kNone) handle_event(event);
@@ -162,12 +199,28 @@ double TopInstance::time() const { return time_base_ + now_.time; }
 
 void TopInstance::handle_event(Event event) {
   ROS_ERROR("spinning_top: %s%s%s at t = %.9g s (simulated): integration stopped; the last valid pose is "
-            "kept. Call ~reset (or ~set_state) to start again.",
+            "kept, at rest. Call ~reset (or ~set_state) to start again.",
             name_.empty() ? "" : "top ", name_.empty() ? "" : (name_ + ": ").c_str(), to_string(event), time());
-  std_msgs::String message;
-  message.data = to_string(event);
-  event_publisher_.publish(message);
+  publish_event(to_string(event), now_, true);
 }
+
+void TopInstance::publish_event(const char* event, const Snapshot& at, bool terminal) {
+  std_msgs::String text;
+  text.data = event;
+  event_publisher_.publish(text);
+  spinning_top::TopEvent stamped;
+  stamped.header.stamp = stamp_of_(origin_ + at.time);
+  stamped.header.frame_id = settings_.world_frame;
+  stamped.name = name_;
+  stamped.event = event;
+  stamped.terminal = terminal;
+  stamped.time = time_base_ + at.time;
+  stamped.phase = to_string(at.phase);
+  stamped.contact_point = to_point(world(at.outputs.contact_point));
+  event_stamped_publisher_.publish(stamped);
+}
+
+Snapshot TopInstance::shown() const { return simulator_->event() == Event::kNone ? now_ : at_rest(now_); }
 
 void TopInstance::rebaseline_energy() {
   energy_baseline_ = now_.outputs.energy + now_.outputs.dissipated_energy;
@@ -190,8 +243,8 @@ void TopInstance::append_transforms(const ros::Time& stamp, std::vector<geometry
 }
 
 geometry_msgs::TransformStamped TopInstance::contact_transform(const ros::Time& stamp) const {
-  // The contact frame: at the tip, axes parallel to the world's, so that the floor force
-  // (in world components) is drawn by rviz where it acts.
+  // The contact frame: at the tip (in the air too), axes parallel to the world's, so that the
+  // floor force (in world components) is drawn by rviz where it acts.
   geometry_msgs::TransformStamped contact;
   contact.header.stamp = stamp;
   contact.header.frame_id = settings_.world_frame;
@@ -202,7 +255,7 @@ geometry_msgs::TransformStamped TopInstance::contact_transform(const ros::Time& 
 }
 
 bool TopInstance::publish(const ros::Time& stamp, bool with_markers) {
-  const Snapshot& s = now_;
+  const Snapshot s = shown();
   if (!finite(s)) {  // the core promises this never happens; never pass it on
     ROS_ERROR_ONCE("spinning_top: non-finite state at t = %.9g s not published", s.time);
     return false;
@@ -220,7 +273,7 @@ bool TopInstance::publish(const ros::Time& stamp, bool with_markers) {
   geometry_msgs::WrenchStamped wrench;
   wrench.header.stamp = stamp;
   wrench.header.frame_id = contact_frame_;
-  wrench.wrench.force = to_vector(force);  // pivot reaction or friction; 0 when frictionless
+  wrench.wrench.force = to_vector(force);  // pivot reaction or friction; 0 when frictionless; all 0 in flight
   normal_force_publisher_.publish(wrench);  // torque about the tip: 0 (a point contact)
 
   // The body's twist in the world frame: omega = q omega_body, and G's velocity.
@@ -233,7 +286,8 @@ bool TopInstance::publish(const ros::Time& stamp, bool with_markers) {
 
   if (state_publisher_.getNumSubscribers() > 0) {
     const EulerState e = euler_state(s.attitude, s.body_rates);
-    const Monitors m = monitors(s, simulator_->config(), energy_baseline_);
+    // The monitors judge the integration: those of the core's state (also after the end).
+    const Monitors m = monitors(now_, simulator_->config(), energy_baseline_, pivot_);
     spinning_top::TopState state;
     state.header = point.header;
     state.name = name_;
@@ -256,6 +310,7 @@ bool TopInstance::publish(const ros::Time& stamp, bool with_markers) {
     state.quaternion_norm_error = m.quaternion_norm_error;
     state.constraint_residual = m.constraint_residual;
     state.event = event_name(simulator_->event());
+    state.phase = to_string(s.phase);
     state_publisher_.publish(state);
   }
 
@@ -274,7 +329,9 @@ void TopInstance::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) 
   using diagnostic_msgs::DiagnosticStatus;
   const Snapshot& s = now_;
   const ModelOutputs& out = s.outputs;
-  const Monitors m = monitors(s, simulator_->config(), energy_baseline_);
+  const Monitors m = monitors(s, simulator_->config(), energy_baseline_, pivot_);
+  // Hops (lift_off, take_off, landing) are the motion, not faults: only the event that ended
+  // the run is an ERROR.
   if (std::abs(m.energy_balance) > settings_.energy_drift_error)
     status.mergeSummaryf(DiagnosticStatus::ERROR, "energy drift %.3g", m.energy_balance);
   else if (std::abs(m.energy_balance) > settings_.energy_drift_warning)
@@ -304,6 +361,14 @@ void TopInstance::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) 
   status.addf("quaternion norm error", "%.3g", m.quaternion_norm_error);
   status.addf("constraint residual [m]", "%.3g", m.constraint_residual);
   status.addf("normal force [N]", "%.9g", out.normal_force);
+  const HopSummary hops = simulator_->hops();
+  status.add("phase", to_string(s.phase));
+  status.addf("tip height [m]", "%.9g", out.contact_point.z());
+  status.add("lift-offs", hops.lift_offs);
+  status.add("take-offs", hops.take_offs);
+  status.add("landings", hops.landings);
+  status.addf("highest hop [m]", "%.9g", hops.max_hop_height);
+  status.addf("energy lost in landings [J]", "%.9g", hops.impact_loss);
 }
 
 }  // namespace ros_front_end

@@ -44,4 +44,4 @@ def test_cfg_defaults_are_the_key_tables(cfg_parameters):
             continue
         assert type(default) is float and default == float(specs[key]["default"]), name
         compared += 1
-    assert compared == 9  # k, g, m, A, C, h, spin, tolerance, step
+    assert compared == 11  # k, g, e, restitution_speed, m, A, C, h, spin, tolerance, step

@@ -45,6 +45,8 @@ class Recorder {
     std::lock_guard<std::mutex> lock(mutex_);
     messages_.clear();
   }
+  /// Publishers connected (e.g. to wait for them before starting a paused node).
+  uint32_t publishers() const { return subscriber_.getNumPublishers(); }
 
  private:
   mutable std::mutex mutex_;

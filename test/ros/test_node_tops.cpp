@@ -68,7 +68,8 @@ TEST(Tops, TwoTopsShareOneClock) {
       ++compared;
     }
   EXPECT_GT(compared, 500u);
-  // One tf message per tick holds both bodies; the fixed tips' pivots are static, at their places.
+  // One tf message per tick holds both bodies; the fixed tips' pivots (after_lift_off: stop, so
+  // they never move) are static, at their places.
   std::map<std::string, int> bodies;
   for (const auto& message : tf.messages())
     for (const auto& t : message.transforms) ++bodies[t.child_frame_id];

@@ -1,5 +1,5 @@
-// What rviz draws of a top: its body (a cone with the top's C/A), a handle, the tip's trace on
-// the floor and the floor's force as an arrow.
+// What rviz draws of a top: its body (a cone from the tip to the rim, or with the top's C/A
+// without a rim), a handle, the tip's trace and the floor's force as an arrow.
 #pragma once
 
 #include <ros/time.h>
@@ -17,8 +17,8 @@ struct MarkerFrames {
   std::string world, body;
 };
 
-/// `contact_point` and `force` (horizontal x, y and R as z) in the world frame; `trace` holds
-/// earlier contact points (world).
+/// `contact_point` (the tip, in the air too) and `force` (horizontal x, y and R as z) in the
+/// world frame; `trace` holds earlier tip positions (world). A zero force deletes the arrow.
 visualization_msgs::MarkerArray top_markers(const TopParameters& top, const Vector3& contact_point,
                                             const Vector3& force, const std::deque<Vector3>& trace,
                                             const MarkerFrames& frames, double force_scale, const ros::Time& stamp);

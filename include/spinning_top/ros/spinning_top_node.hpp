@@ -52,6 +52,10 @@ class SpinningTopNode {
   void send_static_transforms();
   void restart_timer();
   void report(const std::string& status);
+  /// A top's stamps for its events: stamp_origin_ + world time (as the ticks', read when used).
+  TopInstance::StampOf stamp_of() const {
+    return [this](double world_time) { return stamp_origin_ + ros::Duration(world_time); };
+  }
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& status);
   void reconfigure(SpinningTopConfig& config, uint32_t level);
 

@@ -8,6 +8,7 @@
 #include <ros/ros.h>
 
 #include <deque>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -20,13 +21,17 @@ namespace ros_front_end {
 
 class TopInstance {
  public:
+  /// The world's stamp of a world time (the node's stamp origin + t): events are stamped with
+  /// their own instant, which lies between two ticks.
+  using StampOf = std::function<ros::Time(double world_time)>;
+
   /// `name` "" is the node's own top: frames <body_frame>, <contact_frame> and topics ~/...;
   /// a named top has frames <name>/<body_frame>, <name>/<contact_frame> and topics ~<name>/....
   /// Its URDF goes on ~robot_description (~<name>/robot_description).
   /// Its simulated time 0 is the world's `world_time`; its tip starts at `tip_xy` on the floor.
   /// Throws InvalidParameter (nothing advertised) if the configuration is invalid.
   TopInstance(std::string name, const SceneConfig& config, const Eigen::Vector2d& tip_xy,
-              const NodeSettings& settings, ros::NodeHandle private_nh, double world_time);
+              const NodeSettings& settings, ros::NodeHandle private_nh, double world_time, StampOf stamp_of);
   ~TopInstance();
   TopInstance(const TopInstance&) = delete;
   TopInstance& operator=(const TopInstance&) = delete;
@@ -39,14 +44,19 @@ class TopInstance {
   const std::string& contact_frame() const { return contact_frame_; }
 
   /// Advances to the world's simulated time; false if the budget ran out first (call again
-  /// with the same time). A validity event is logged and published on the latched ~event.
+  /// with the same time). Every transition passed on the way (lift_off, take_off, landing) and
+  /// the event that ends the run are published on ~event and ~event_stamped, in time order.
   bool advance(double world_time, const WorkBudget& budget);
   /// The tick's transforms world -> body (and world -> contact unless it is static).
   void append_transforms(const ros::Time& stamp, std::vector<geometry_msgs::TransformStamped>& out) const;
-  /// The fixed tip's contact frame never moves: it goes once on /tf_static.
-  bool contact_is_static() const { return start_config_.scene == SceneType::kFixedTip; }
+  /// A pivot that can never move goes once on /tf_static: a fixed tip that may not leave the
+  /// floor (after_lift_off: stop). Where the tip can fly, it lands elsewhere: /tf, every tick.
+  bool contact_is_static() const {
+    return start_config_.scene == SceneType::kFixedTip && start_config_.after_lift_off == AfterLiftOff::kStop;
+  }
   geometry_msgs::TransformStamped contact_transform(const ros::Time& stamp) const;
-  /// The tick's topics: contact point, floor force, twist, state (and markers when asked).
+  /// The tick's topics: contact point, floor force, twist, state (and markers when asked); after
+  /// the event that ended the run, the final pose at rest (shown()).
   /// Returns false (nothing published) for a non-finite state, which the core promises never happens.
   bool publish(const ros::Time& stamp, bool with_markers);
 
@@ -60,12 +70,20 @@ class TopInstance {
   bool update(const TopParameters& top, const IntegratorSettings& integrator);
   /// Live changes of the body (m, A, C, h) and of the spin omega_Z, from the current state: the
   /// attitude, the other rates, the tip's place and the simulated time go on. Refused (throws
-  /// InvalidParameter, nothing changes) for an invalid body or state, or after a validity event.
+  /// InvalidParameter, nothing changes) for an invalid body or state, after the event that ended
+  /// the run, or while the tip is off the floor (require_on_the_floor()).
   void change_body(const TopParameters& top, double spin);
   /// [s] the top's simulated time: since its start, reset or set_state (live body changes go on).
   double time() const;
   /// The state at time(), taken once per change of it (every publication of a tick reads it).
   const Snapshot& snapshot() const { return now_; }
+  /// What the topics show: snapshot(), or after the event that ended the run the final pose at
+  /// rest (rates, velocities and floor forces 0), not the motion the run had at its end.
+  Snapshot shown() const;
+  /// The core takes no live change while the tip is off the floor (Simulator::update refuses it
+  /// in flight and while skimming): throws InvalidParameter(key, why) then, so that the node can
+  /// refuse a change for every top before it changes any.
+  void require_on_the_floor(const std::string& key) const;
 
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) const;
   Event event() const { return simulator_->event(); }
@@ -80,6 +98,8 @@ class TopInstance {
   /// The core's origin on the floor such that the current contact point is at tip_xy.
   void place_tip_at(const Eigen::Vector2d& tip_xy);
   void handle_event(Event event);
+  /// `event` on ~event (its name) and ~event_stamped (with the state `at`, the simulator's).
+  void publish_event(const char* event, const Snapshot& at, bool terminal);
   void rebaseline_energy();
   /// The core's position in the world frame (the top's place on the floor added).
   Vector3 world(const Vector3& core_position) const { return core_position + offset_; }
@@ -92,13 +112,15 @@ class TopInstance {
   std::unique_ptr<Simulator> simulator_;
   Snapshot now_;  // simulator_->snapshot(), refreshed whenever the simulator changes
   Vector3 offset_ = Vector3::Zero();  // the core's origin in the world frame (on the floor)
+  Vector3 pivot_ = Vector3::Zero();   // fixed tip: where the tip pivots (core frame): its start or last landing
   double origin_ = 0.0;     // [s] world time of the simulator's time 0
   double time_base_ = 0.0;  // [s] the top's time at the simulator's time 0 (live body changes)
   double energy_baseline_ = 0.0;
+  StampOf stamp_of_;
   std::deque<Vector3> trace_;
   ros::NodeHandle nh_;  // ~ or ~<name>
   ros::Publisher contact_point_publisher_, normal_force_publisher_, twist_publisher_, state_publisher_,
-      marker_publisher_, event_publisher_;
+      marker_publisher_, event_publisher_, event_stamped_publisher_;
 };
 
 }  // namespace ros_front_end
