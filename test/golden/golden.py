@@ -76,6 +76,14 @@ def simulate_cases():
                                   "--set", "initial/tilt=0.8"],
         "lift_off/viscous/stiff": ["--config", "config/viscous.yaml", "--set", "initial/precession_rate=60",
                                    "--set", "initial/tilt=0.8", "--set", "friction=2000"],
+        # Issue 18: hops with bounces, a fixed tip that flies and lands on a new pivot, and the
+        # contact model alone (after_lift_off: stop).
+        "hops/frictionless/bounce": ["--config", "config/frictionless.yaml", "--set", "initial/precession_rate=60",
+                                     "--set", "initial/tilt=0.8", "--set", "restitution=0.5",
+                                     "--set", "restitution_speed=0"],
+        "hops/fixed_tip/nutation": ["--config", "config/fixed_tip.yaml", "--set", "initial/nutation_rate=20"],
+        "hops/frictionless/stop": ["--config", "config/frictionless.yaml", "--set", "initial/precession_rate=60",
+                                   "--set", "initial/tilt=0.8", "--set", "after_lift_off=stop"],
         # An invalid state at release: one row with its event.
         "lift_off/at_release": ["--config", "config/fixed_tip.yaml", "--set", "initial/nutation_rate=200"],
         # A state exact refuses (nothing drives the nutation): auto runs its fallback, dop853, and
