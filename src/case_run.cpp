@@ -55,18 +55,6 @@ double tilt_of(const Quaternion& q) {
 }
 
 namespace {
-CaseOutcome run_case_with(const SceneConfig& config, const CaseSettings& settings, bool allow_closed_form);
-CaseOutcome run_case_sampled(const SceneConfig& config, const CaseSettings& settings) {
-  return run_case_with(config, settings, false);
-}
-}  // namespace
-
-CaseOutcome run_case(const SceneConfig& config, const CaseSettings& settings) {
-  validate(settings);
-  return run_case_with(config, settings, true);
-}
-
-namespace {
 CaseOutcome run_case_with(const SceneConfig& config, const CaseSettings& settings, bool allow_closed_form) {
   const std::unique_ptr<Simulator> simulator = make_simulator(config);
   const TopParameters& top = config.top;
@@ -107,8 +95,7 @@ CaseOutcome run_case_with(const SceneConfig& config, const CaseSettings& setting
   if (closed_form && simulator->hops().lift_offs > 0) {
     // The tip left the floor: the extremes of a closed form's contact phase no longer cover the
     // run. Run the case again, sampled as a time-stepper's (the hops' own figures are exact).
-    CaseSettings sampled = settings;
-    return run_case_sampled(config, sampled);
+    return run_case_with(config, settings, /*allow_closed_form=*/false);
   }
   outcome.event = run.event;
   outcome.out_of_steps = run.out_of_steps;
@@ -130,5 +117,10 @@ CaseOutcome run_case_with(const SceneConfig& config, const CaseSettings& setting
 }
 
 }  // namespace
+
+CaseOutcome run_case(const SceneConfig& config, const CaseSettings& settings) {
+  validate(settings);
+  return run_case_with(config, settings, /*allow_closed_form=*/true);
+}
 
 }  // namespace spinning_top

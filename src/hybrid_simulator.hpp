@@ -110,7 +110,7 @@ class HybridSimulator final : public Simulator {
   }
 
   std::optional<MotionRange> motion_range() const override {
-    if (left_contact_) return std::nullopt;  // ranges of one contact phase only
+    if (hops_.lift_offs > 0) return std::nullopt;  // the tip has left the floor: ranges of one contact phase only
     return contact_->motion_range();
   }
 
@@ -128,7 +128,6 @@ class HybridSimulator final : public Simulator {
     finished_steps_ = 0;
     impact_loss_ = 0.0;
     flight_work_ = 0.0;
-    left_contact_ = false;
     same_instant_ = 0;
     last_transition_time_ = -1.0;
     settle_start();
@@ -269,7 +268,6 @@ class HybridSimulator final : public Simulator {
     flight_work_ = s.outputs.dissipated_energy - impact_loss_;
     flight_ = Flight(config_.top, time_, free_body_of(s), TipStart{});
     phase_ = Phase::kFlight;
-    left_contact_ = true;
   }
 
   /// The contact phase's driver reported kLiftOff: R < 0 ahead (contact), or the skim's end.
@@ -318,7 +316,6 @@ class HybridSimulator final : public Simulator {
     } else if constexpr (kViscous) {
       restart_contact(Model(config_.top, config_.initial, true), y);
       if (terminal_ != Event::kNone) return;
-      left_contact_ = true;
     }
     record(Event::kLiftOff);
   }
@@ -365,12 +362,7 @@ class HybridSimulator final : public Simulator {
     // Plastic: the contact phase resumes from the state after the impulse.
     const FreeBody& s = landing.after;
     State y = State::Zero();
-    y[state_index::kQw] = s.attitude.w();
-    y[state_index::kQx] = s.attitude.x();
-    y[state_index::kQy] = s.attitude.y();
-    y[state_index::kQz] = s.attitude.z();
-    y[state_index::kOmegaX] = s.body_rates.x();
-    y[state_index::kOmegaY] = s.body_rates.y();
+    set_attitude_and_rates(s.attitude, s.body_rates, y);
     if constexpr (kViscous) {
       y[Viscous::kX] = s.position.x();
       y[Viscous::kY] = s.position.y();
@@ -410,7 +402,6 @@ class HybridSimulator final : public Simulator {
   long finished_steps_ = 0;   ///< the steps of the phases before the current contact phase
   double impact_loss_ = 0.0;  ///< [J] kinetic energy lost in the landings so far
   double flight_work_ = 0.0;  ///< [J] W at the last lift-off (constant in flight)
-  bool left_contact_ = false; ///< the tip has left the floor once (motion_range: nullopt)
 };
 
 /// The scene's simulator: its contact phase alone with `after_lift_off: stop` (the seed's

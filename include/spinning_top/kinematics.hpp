@@ -113,17 +113,21 @@ inline EulerState euler_state(const Quaternion& attitude, const Vector3& body_ra
   return e;
 }
 
-/// Writes the attitude and transverse rates of the initial conditions into y[0..5].
+/// Writes an attitude and the transverse body rates (omega_X, omega_Y of body_rates) into y[0..5].
 template <class State>
-void set_initial_attitude_and_rates(const InitialConditions& ic, State& y) {
-  const Quaternion q = initial_attitude(ic);
-  const Vector3 omega = initial_body_rates(ic);
+void set_attitude_and_rates(const Quaternion& q, const Vector3& body_rates, State& y) {
   y[state_index::kQw] = q.w();
   y[state_index::kQx] = q.x();
   y[state_index::kQy] = q.y();
   y[state_index::kQz] = q.z();
-  y[state_index::kOmegaX] = omega.x();
-  y[state_index::kOmegaY] = omega.y();
+  y[state_index::kOmegaX] = body_rates.x();
+  y[state_index::kOmegaY] = body_rates.y();
+}
+
+/// Writes the attitude and transverse rates of the initial conditions into y[0..5].
+template <class State>
+void set_initial_attitude_and_rates(const InitialConditions& ic, State& y) {
+  set_attitude_and_rates(initial_attitude(ic), initial_body_rates(ic), y);
 }
 
 }  // namespace spinning_top
