@@ -74,6 +74,13 @@ cmake --build "$SPINNING_TOP_BUILD" --target spinning_top_node -- -j"$(nproc)"
   SPINNING_TOP_NODE="$bin/spinning_top_node" /usr/bin/python3 "$SPINNING_TOP_ROOT/bench/node_load.py" "$results" "${quick[@]}"
 )
 
+echo "bench.sh: wall-clock lag and pacing diagnostics, quiet and beside two busy loops (issue 19)"
+(
+  set +u
+  source "$SPINNING_TOP_BUILD/devel/setup.bash"
+  SPINNING_TOP_NODE="$bin/spinning_top_node" /usr/bin/python3 "$SPINNING_TOP_ROOT/bench/wall_clock_lag.py" "$results" "${quick[@]}"
+)
+
 echo "bench.sh: plots and summary"
 /usr/bin/python3 "$SPINNING_TOP_ROOT/bench/plot_results.py" "$results"
 # The README shows the measured tables; a --quick run's coarse figures do not replace them.
