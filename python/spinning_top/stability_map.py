@@ -7,10 +7,11 @@ duration, `fallen after hops` where it fell; value="max_hop_height" or "lift_off
     stability_map.plot(rows, "initial/spin", "initial/tilt", "map.png")
 """
 import math
+import os
 
 import numpy as np
 
-from spinning_top import _core
+from spinning_top import _cli, _core
 
 #: Outcome -> (colour, legend label), in legend order: the run's outcome column, with the hops
 #: (lift_offs > 0) and a state refused at the release (end_time 0) told apart.
@@ -89,7 +90,9 @@ def shown_outcomes(rows):
 
 
 def plot(rows, x, y, path, title=None, value="event_time"):
-    """Writes a PNG of two panels over (x, y): the outcome of each case, and `value`, a numeric
+    """Writes a picture of two panels over (x, y) to exactly `path`, as PNG, SVG, PDF, ... by its
+    extension (another extension, a directory, a missing directory or a failed write raise
+    ValueError; no file is left half written): the outcome of each case, and `value`, a numeric
     column of the rows (default the time of its event; cases without a value in grey; e.g.
     final_tilt shows how friction raises or lowers the axis, max_hop_height or lift_offs the hops,
     grey where the tip never left the floor). A grid design is drawn as cells, a
@@ -102,6 +105,9 @@ def plot(rows, x, y, path, title=None, value="event_time"):
     from matplotlib.colors import ListedColormap
     from matplotlib.patches import Patch
 
+    fmt = None
+    if isinstance(path, (str, os.PathLike)):  # else a file object: PNG
+        fmt = _cli.check_output(None, path, _cli.figure_formats())
     for key in (x, y):
         if key not in rows:
             raise ValueError(f"{key} is not a varied key of this sweep (columns: {', '.join(rows.columns)})")
@@ -162,8 +168,13 @@ def plot(rows, x, y, path, title=None, value="event_time"):
         ax.set_title(what)
     scene = base.get("scene", "")
     fig.suptitle(title or f"{scene} top: {len(rows)} cases of {duration:g} s" if duration else title or scene)
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    try:
+        if fmt is None:
+            fig.savefig(path, dpi=110, format="png")
+        else:  # rendered in memory, then written whole to exactly `path` (never `path`.png)
+            _cli.write_file(None, path, _cli.figure_bytes(fig, fmt, dpi=110))
+    finally:
+        plt.close(fig)
 
 
 def _label(key):

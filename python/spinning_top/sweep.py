@@ -16,15 +16,18 @@ runs them and however they are batched.
 
 Command line: ``python3 -m spinning_top.sweep --help``.
 """
-import argparse
 import concurrent.futures
 import math
+import numbers
 import os
+import socket
 import sys
+import tempfile
+import warnings
 
 import numpy as np
 
-from spinning_top import _core
+from spinning_top import _cli, _core
 
 #: The columns each case adds to its row, after the varied keys: name -> what it holds (the unit
 #: first), in order. The core's run_cases writes them (its one list of them).
@@ -35,6 +38,33 @@ DEFAULT_SETTINGS = _core.CaseSettings()
 
 #: Cases per batch at most: ~0.1 s of fixed-tip work, small against a Dask task's ~1 ms cost.
 MAX_BATCH = 4096
+
+#: Cases a sweep may have at most: its rows take ~200 MB; a larger design is refused with its
+#: count before anything is allocated (split it, or raise this from Python).
+MAX_CASES = 10 ** 6
+
+#: [s] How long reaching a Dask scheduler may take, and how long a sweep waits for a cluster
+#: without workers to get one, before they are refused (Dask's own default waits 30 s).
+CONNECT_TIMEOUT = 10.0
+WORKER_TIMEOUT = 10.0
+
+#: Local threads a sweep may use at most (each is an OS thread).
+MAX_WORKERS = 1024
+
+#: Formats of the rows (--output): extension -> name.
+ROW_FORMATS = {"csv": "CSV", "parquet": "Parquet"}
+
+
+def _too_many(count):
+    return ValueError(f"{count:.6g} cases, more than the {MAX_CASES:.6g} a sweep may run (sweep.MAX_CASES); "
+                      "split the sweep")
+
+
+def _finite(key, value):
+    value = float(value)
+    if not math.isfinite(value):
+        raise ValueError(f"{key}: {value:.6g} is not a finite number")
+    return value
 
 
 def design(ranges, kind="grid", cases=None, seed=0):
@@ -54,26 +84,37 @@ def design(ranges, kind="grid", cases=None, seed=0):
             spec = ranges[key]
             if isinstance(spec, tuple) and len(spec) == 3:
                 low, high, n = spec
-                if int(n) != n or n < 1:
+                if not isinstance(n, numbers.Real) or not math.isfinite(n) or int(n) != n or n < 1:
                     raise ValueError(f"{key}: a grid axis needs a whole number of points >= 1, got {n}")
-                axes.append(np.linspace(float(low), float(high), int(n)))
+                axes.append((_finite(key, low), _finite(key, high), int(n)))
             elif isinstance(spec, tuple) and len(spec) == 2:
                 raise ValueError(f"{key}: a grid axis is (low, high, n) (LOW:HIGH:N) or a list of values; "
                                  "(low, high) is a range of a random or sobol design")
             else:
-                axes.append(np.asarray(spec, dtype=float).ravel())
+                values = np.asarray(spec, dtype=float).ravel()
+                if values.size == 0:
+                    raise ValueError(f"{key}: no values")
+                for value in values[~np.isfinite(values)][:1]:
+                    _finite(key, value)
+                axes.append(values)
+        count = math.prod(a[2] if isinstance(a, tuple) else len(a) for a in axes)
+        if count > MAX_CASES:  # before any array of that size is asked for
+            raise _too_many(count)
+        axes = [np.linspace(*a) if isinstance(a, tuple) else a for a in axes]
         mesh = np.meshgrid(*axes, indexing="ij")
         return {key: m.ravel() for key, m in zip(keys, mesh)}
     if kind not in ("random", "sobol"):
         raise ValueError(f"design: kind must be grid, random or sobol, got {kind!r}")
-    if cases is None or int(cases) != cases or cases < 1:
+    if not isinstance(cases, numbers.Real) or not math.isfinite(cases) or int(cases) != cases or cases < 1:
         raise ValueError(f"a {kind} design needs cases >= 1, got {cases}")
+    if cases > MAX_CASES:
+        raise _too_many(cases)
     bounds = []
     for key in keys:
         spec = ranges[key]
         if not (isinstance(spec, tuple) and len(spec) == 2):
             raise ValueError(f"{key}: a {kind} axis is (low, high), got {spec!r}")
-        bounds.append((float(spec[0]), float(spec[1])))
+        bounds.append((_finite(key, spec[0]), _finite(key, spec[1])))
     if kind == "random":
         unit = np.random.default_rng(seed).random((int(cases), len(keys)))
     else:
@@ -81,7 +122,9 @@ def design(ranges, kind="grid", cases=None, seed=0):
 
         sampler = qmc.Sobol(d=len(keys), scramble=True, seed=seed)
         m = math.log2(cases)
-        unit = sampler.random_base2(int(m)) if m == int(m) else sampler.random(int(cases))
+        with warnings.catch_warnings():  # the balance of n != 2^m points: the command line says it in one line
+            warnings.simplefilter("ignore")
+            unit = sampler.random_base2(int(m)) if m == int(m) else sampler.random(int(cases))
     return {key: low + (high - low) * unit[:, i] for i, (key, (low, high)) in enumerate(zip(keys, bounds))}
 
 
@@ -109,9 +152,50 @@ def _progress_bar(total, enabled):
 
 
 def _client(scheduler):
+    """(client, whether this call made it): a distributed.Client, or one connected to the address
+    within CONNECT_TIMEOUT. ConnectionError (an OSError) naming the address if it cannot be reached."""
     from distributed import Client
 
-    return scheduler if isinstance(scheduler, Client) else Client(scheduler)
+    if isinstance(scheduler, Client):
+        return scheduler, False
+    from distributed.comm.addressing import parse_address, parse_host_port
+
+    address = str(scheduler)
+    what = _cli.short(address, 60, quote=False)
+    try:
+        protocol, location = parse_address(address)
+        if protocol == "tcp":  # refused or unreachable: known at once, not after Dask's retries
+            host, port = parse_host_port(location)
+            socket.create_connection((host, port), timeout=CONNECT_TIMEOUT).close()
+        return Client(address, timeout=CONNECT_TIMEOUT), True
+    except (ValueError, TypeError) as error:
+        raise ConnectionError(f"cannot connect to {what}: not a scheduler address ({error})") from None
+    except socket.timeout:
+        raise ConnectionError(f"cannot connect to {what}: no answer within {CONNECT_TIMEOUT:g} s") from None
+    except OSError as error:
+        reason = error.strerror or str(error) or type(error).__name__
+        raise ConnectionError(f"cannot connect to {what}: {reason}") from None
+
+
+def _workers(client):
+    """The threads of a cluster's workers; waits WORKER_TIMEOUT for a first worker, then refuses
+    (its tasks would wait for one forever)."""
+    if not client.nthreads():
+        try:
+            client.wait_for_workers(1, timeout=WORKER_TIMEOUT)
+        except (TimeoutError, OSError):
+            address = _cli.short(client.scheduler.address, 60, quote=False)
+            raise ConnectionError(f"the scheduler at {address} has no workers "
+                                  f"(none came within {WORKER_TIMEOUT:g} s)") from None
+    return max(1, sum(client.nthreads().values()))
+
+
+def _whole(name, value, most=None):
+    if value is not None and (isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < 1):
+        raise ValueError(f"{name}: must be a whole number >= 1, got {value}")
+    if value is not None and most is not None and value > most:
+        raise ValueError(f"{name}: at most {most}, got {value}")
+    return value
 
 
 def run(base, cases, duration=DEFAULT_SETTINGS.duration, sample_rate=DEFAULT_SETTINGS.sample_rate,
@@ -123,23 +207,39 @@ def run(base, cases, duration=DEFAULT_SETTINGS.duration, sample_rate=DEFAULT_SET
     InvalidParameter before anything runs; a case the core refuses for its own values (C > 2A
     somewhere in a sweep of C) is a row with outcome "refused" and the core's message.
     scheduler: None for this machine's cores (threads: the core runs without the GIL), or a
-    Dask scheduler address or distributed.Client. workers: local threads (default: every core
-    this process may run on).
+    Dask scheduler address or distributed.Client (an address it cannot reach within
+    CONNECT_TIMEOUT raises ConnectionError). workers: local threads (default: every core this
+    process may run on). Zero cases, more than MAX_CASES, or workers or batch_size below 1 raise
+    ValueError naming what is wrong.
     """
-    import pandas as pd
-
+    _whole("workers", workers, MAX_WORKERS)
+    _whole("batch_size", batch_size)
     columns = {key: np.ascontiguousarray(values, dtype=float) for key, values in cases.items()}
     lengths = {len(v) for v in columns.values()}
     if len(lengths) > 1:
         raise ValueError("every varied key needs one value per case")
     count = lengths.pop() if lengths else 1
+    if count == 0:
+        raise ValueError("a sweep needs at least one case, got 0")
+    if count > MAX_CASES:
+        raise _too_many(count)
     _core.validate({**base, **{key: float(v[0]) for key, v in columns.items()}})
     settings = (float(duration), float(sample_rate), float(max_steps))
     _core.CaseSettings(*settings)  # refuses bad settings now, naming them
 
-    client = _client(scheduler) if scheduler is not None else None
+    client, own_client = _client(scheduler) if scheduler is not None else (None, False)
+    try:
+        return _run(base, columns, count, settings, duration, client, workers, batch_size, progress)
+    finally:
+        if own_client:
+            client.close()
+
+
+def _run(base, columns, count, settings, duration, client, workers, batch_size, progress):
+    import pandas as pd
+
     if client is not None:
-        workers = max(1, sum(client.nthreads().values()))
+        workers = _workers(client)
     else:
         workers = workers or len(os.sched_getaffinity(0)) or 1  # the cores this process may use
     spans = _batches(count, workers, batch_size)
@@ -177,57 +277,166 @@ def run(base, cases, duration=DEFAULT_SETTINGS.duration, sample_rate=DEFAULT_SET
     return rows
 
 
-def write(rows, path):
-    """CSV (floats as Python's repr: the shortest text that reads back to the same double) or
-    Parquet (needs pyarrow or fastparquet, which Debian bookworm does not package)."""
-    path = str(path)
-    if path.endswith(".parquet"):
+def _parquet_engine():
+    """None if pandas can write Parquet here, else why not."""
+    for engine in ("pyarrow", "fastparquet"):
         try:
-            rows.to_parquet(path, index=False)
-        except ImportError as error:
-            raise SystemExit(f"sweep: --output {path}: Parquet needs pyarrow or fastparquet ({error}); "
-                             "Debian bookworm packages neither: write .csv instead")
-    else:
-        rows.to_csv(path, index=False)
+            __import__(engine)
+            return None
+        except ImportError:
+            pass
+    return "Parquet needs pyarrow or fastparquet, which Debian bookworm does not package: write .csv instead"
+
+
+def _row_bytes(rows, fmt):
+    if fmt == "parquet":
+        return rows.to_parquet(None, index=False)
+    return rows.to_csv(index=False).encode()
+
+
+def write(rows, path):
+    """Writes the rows to exactly `path`: CSV (floats as Python's repr: the shortest text that
+    reads back to the same double) or Parquet (needs pyarrow or fastparquet, which Debian
+    bookworm does not package), by the extension; another extension, a directory, a missing
+    directory or a failed write raise ValueError (the file is written whole or not at all)."""
+    fmt = _cli.check_output(None, path, ROW_FORMATS)
+    if fmt == "parquet" and _parquet_engine():
+        raise ValueError(f"{_cli.short_path(path)}: {_parquet_engine()}")
+    _cli.write_file(None, path, _row_bytes(rows, fmt))
+
+
+def _keep(rows):
+    """Saves rows that could not be written where asked in a new CSV file (the temporary
+    directory, else the working one); says where."""
+    data = _row_bytes(rows, "csv")
+    for directory in (tempfile.gettempdir(), os.getcwd()):
+        path = None
+        try:
+            fd, path = tempfile.mkstemp(prefix="sweep-rows-", suffix=".csv", dir=directory)
+            with os.fdopen(fd, "wb") as f:
+                f.write(data)
+            return f"the {len(rows)} rows are in {path}"
+        except OSError:
+            if path:
+                try:
+                    os.remove(path)
+                except OSError:
+                    pass
+    return f"the {len(rows)} rows could not be saved anywhere (no space in {tempfile.gettempdir()} nor here)"
+
+
+def _write_stdout(text):
+    try:
+        sys.stdout.write(text)
+        sys.stdout.flush()
+    except OSError as error:
+        try:  # nothing more reaches a closed or full stdout, not even Python's last flush at exit
+            os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        except (OSError, AttributeError, ValueError):
+            pass
+        raise _cli.UsageError("--output", f"cannot write to stdout: {error.strerror or error}") from None
 
 
 # --- command line ------------------------------------------------------------------------------
 
 def _parse_vary(text):
-    if "=" not in text:
-        raise ValueError(f"--vary: expected KEY=LOW:HIGH[:N] or KEY=V1,V2,..., got {text!r}")
+    if "=" not in text or text.startswith("="):
+        raise _cli.UsageError("--vary", f"expected KEY=LOW:HIGH[:N] or KEY=V1,V2,..., got {_cli.short(text)}")
     key, spec = text.split("=", 1)
     try:
-        if ":" in spec:
-            parts = [float(p) for p in spec.split(":")]
-            if len(parts) == 3:
-                if parts[2] != int(parts[2]):
-                    raise ValueError
-                return key, (parts[0], parts[1], int(parts[2]))
-            if len(parts) == 2:
-                return key, (parts[0], parts[1])
+        parts = [float(p) for p in spec.split(":" if ":" in spec else ",")]
+        if not all(math.isfinite(p) for p in parts):
             raise ValueError
-        return key, [float(p) for p in spec.split(",")]
+        if ":" not in spec:
+            return key, parts
+        if len(parts) == 3:
+            if parts[2] != int(parts[2]):
+                raise ValueError
+            return key, (parts[0], parts[1], int(parts[2]))
+        if len(parts) == 2:
+            return key, (parts[0], parts[1])
+        raise ValueError
     except ValueError:
-        raise ValueError(f"--vary {key}: expected LOW:HIGH[:N] or V1,V2,... (numbers), got {spec!r}") from None
+        raise _cli.UsageError(f"--vary {_cli.short(key, quote=False)}",
+                              f"expected LOW:HIGH[:N] or V1,V2,... (finite numbers), got {_cli.short(spec)}") from None
+
+
+def _options(args):
+    """The keys of --set and the ranges of --vary; refuses what would be ignored or overridden."""
+    if args.design == "grid":
+        for option, value in (("--cases", args.cases), ("--seed", args.seed)):
+            if value is not None:
+                raise _cli.UsageError(option, "only for --design random or sobol (a grid has its own cases)")
+    elif args.cases is None:
+        raise _cli.UsageError("--cases", f"a {args.design} design needs --cases N")
+    elif args.cases > MAX_CASES:
+        raise _cli.UsageError("--cases", str(_too_many(args.cases)))
+    if not args.plot:
+        for option, value in (("--x", args.x), ("--y", args.y), ("--value", args.value)):
+            if value is not None:
+                raise _cli.UsageError(option, "only with --plot (it chooses what the map shows)")
+    overrides = {}
+    for item in args.set:
+        if "=" not in item or item.startswith("="):
+            raise _cli.UsageError("--set", f"expected KEY=VALUE, got {_cli.short(item)}")
+        key, value = item.split("=", 1)
+        if key in overrides:
+            raise _cli.UsageError(f"--set {_cli.short(key, quote=False)}", "given twice")
+        overrides[key] = value
+    ranges = {}
+    for item in args.vary:
+        key, spec = _parse_vary(item)
+        if key in ranges:
+            raise _cli.UsageError(f"--vary {_cli.short(key, quote=False)}", "given twice")
+        if key in overrides:
+            raise _cli.UsageError(f"--set {_cli.short(key, quote=False)}",
+                                  "also given by --vary (which one should hold?)")
+        ranges[key] = spec
+    return overrides, ranges
+
+
+def _check_outputs(args):
+    """Refuses, before any case runs, outputs that cannot be written as asked."""
+    if args.output:
+        if _cli.check_output("--output", args.output, ROW_FORMATS) == "parquet" and _parquet_engine():
+            raise _cli.UsageError("--output", f"{_cli.short_path(args.output)}: {_parquet_engine()}")
+        try:
+            if os.path.samefile(args.output, args.config):
+                raise _cli.UsageError("--output", f"{_cli.short_path(args.output)} is the --config file")
+        except OSError:
+            pass
+    if args.plot:
+        _cli.check_output("--plot", args.plot, _cli.figure_formats())
+
+
+def _blame(error, args, overrides, ranges):
+    """The option that gave the key the core refused: `--option: message`."""
+    key = getattr(error, "key", None)
+    if key in ranges:
+        return f"--vary: {error}"
+    if key in overrides:
+        return f"--set: {error}"
+    return f"--config: {args.config}: {error}"
 
 
 def main(argv=None):
-    parser = argparse.ArgumentParser(
-        prog="sweep",
+    parser = _cli.Parser(
+        prog="sweep", error_prog="sweep",
         description="Runs a scene over a grid or a random or Sobol sample of its keys, one row per case "
                     "(the outcome, event time, least R, largest tilt, energy balance, the hops, method), and draws a "
                     "stability map. Each case runs in the C++ core to --duration or its first terminal event (the tip's hops go on).",
         epilog="Example (the README's map): sweep --config config/fixed_tip.yaml --vary initial/spin=0:200:201 "
-               "--vary initial/tilt=0:1.4:141 --output map.csv --plot map.png")
+               "--vary initial/tilt=0:1.4:141 --output map.csv --plot map.png. Errors are one line naming the "
+               "option, exit status 2; outputs are checked before the first case runs.")
     parser.add_argument("--config", required=True, help="scene file (YAML), e.g. config/fixed_tip.yaml")
     parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
-                        help="overrides one key of the scene file for every case (repeatable)")
+                        help="overrides one key of the scene file for every case (repeatable, once per key)")
     parser.add_argument("--vary", action="append", default=[], metavar="KEY=SPEC", required=True,
-                        help="a key to vary: LOW:HIGH:N (grid axis), LOW:HIGH (random, sobol) or V1,V2,... (grid)")
+                        help="a key to vary, once per key: LOW:HIGH:N (grid axis), LOW:HIGH (random, sobol) or "
+                             f"V1,V2,... (grid); at most {MAX_CASES:.0e} cases")
     parser.add_argument("--design", choices=["grid", "random", "sobol"], default="grid")
-    parser.add_argument("--cases", type=int, help="number of cases of a random or sobol design")
-    parser.add_argument("--seed", type=int, default=0, help="seed of a random or sobol design (default 0)")
+    parser.add_argument("--cases", type=_cli.whole_number(1), help="number of cases of a random or sobol design")
+    parser.add_argument("--seed", type=_cli.whole_number(0), help="seed of a random or sobol design (default 0)")
     parser.add_argument("--duration", type=float, default=DEFAULT_SETTINGS.duration,
                         help="[s] each case runs to it or its first terminal event (default %(default)g)")
     parser.add_argument("--sample-rate", type=float, default=DEFAULT_SETTINGS.sample_rate,
@@ -235,64 +444,104 @@ def main(argv=None):
                              "none)")
     parser.add_argument("--max-steps", type=float, default=DEFAULT_SETTINGS.max_steps,
                         help="integration steps a case may take (default %(default)g)")
-    parser.add_argument("--output", help="rows as .csv or .parquet (default: CSV on stdout)")
-    parser.add_argument("--plot", help="stability map as PNG (outcome and event time over --x and --y)")
-    parser.add_argument("--value", default="event_time",
-                        help="numeric column shown in the map's second panel (default event_time; e.g. final_tilt, "
-                             "max_hop_height, lift_offs)")
-    parser.add_argument("--x", help="key on the map's x axis (default: the first --vary)")
-    parser.add_argument("--y", help="key on the map's y axis (default: the second --vary)")
+    parser.add_argument("--output", help="rows as .csv or .parquet (default: CSV on stdout); if it cannot be "
+                        "written after the run, the rows go to a new file in the temporary directory, named")
+    parser.add_argument("--plot", help="stability map (outcome and event time over --x and --y) as .png, .svg, "
+                        ".pdf, ...")
+    parser.add_argument("--value", help="with --plot: numeric column shown in the map's second panel (default "
+                        "event_time; e.g. final_tilt, max_hop_height, lift_offs)")
+    parser.add_argument("--x", help="with --plot: key on the map's x axis (default: the first --vary)")
+    parser.add_argument("--y", help="with --plot: key on the map's y axis (default: the second --vary)")
     parser.add_argument("--scheduler", help="Dask scheduler address (tcp://host:8786); default: this machine's cores")
-    parser.add_argument("--workers", type=int, help="local threads (default: every core)")
-    parser.add_argument("--batch-size", type=int, help=f"cases per task (default: 16 tasks per worker, at most {MAX_BATCH})")
+    parser.add_argument("--workers", type=_cli.whole_number(1, MAX_WORKERS),
+                        help=f"local threads (default: every core; at most {MAX_WORKERS})")
+    parser.add_argument("--batch-size", type=_cli.whole_number(1),
+                        help=f"cases per task (default: 16 tasks per worker, at most {MAX_BATCH})")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
     args = parser.parse_args(argv)
 
     def fail(message):
-        print(f"sweep: error: {message}", file=sys.stderr)
-        return 2
+        return _cli.fail("sweep", message)
 
     try:
-        base = dict(_core.read_scene_file(args.config))
-    except _core.SceneFileError as error:
-        return fail(f"--config: {error}")
-    for item in args.set:
-        if "=" not in item or item.startswith("="):
-            return fail(f"--set: expected key=value, got {item!r}")
-        key, value = item.split("=", 1)
-        base[key] = value
+        overrides, ranges = _options(args)
+        _check_outputs(args)
+    except _cli.UsageError as error:
+        return fail(error)
     try:
-        ranges = dict(_parse_vary(v) for v in args.vary)
-        cases = design(ranges, args.design, args.cases, args.seed)
+        file_keys = dict(_core.read_scene_file(args.config))
+    except (ValueError, OSError) as error:  # SceneFileError is a ValueError
+        return fail(f"--config: {error}")
+    except MemoryError:
+        return fail(f"--config: {_cli.short_path(args.config)}: too large to read")
+    base = {**file_keys, **overrides}
+    try:
+        cases = design(ranges, args.design, args.cases, 0 if args.seed is None else args.seed)
+    except ValueError as error:
+        return fail(f"--vary: {error}")
+    if args.design == "sobol" and args.cases & (args.cases - 1):
+        print(f"sweep: warning: --cases {args.cases}: Sobol points are balanced for a power of 2 cases "
+              f"(e.g. {1 << (args.cases.bit_length() - 1)} or {1 << args.cases.bit_length()})", file=sys.stderr)
+    try:
+        settings = _core.CaseSettings(args.duration, args.sample_rate, args.max_steps)
+    except _core.InvalidParameter as error:
+        option = "--" + error.key.replace("_", "-")
+        message = str(error)
+        return fail(f"{option}: {message[len(error.key) + 2:] if message.startswith(error.key + ': ') else message}")
+    try:
         _core.validate({**base, **{k: float(v[0]) for k, v in cases.items()}}, require_all=True)
-        if args.plot:  # checked before the sweep runs, not after
-            keys = list(cases)
-            x, y = args.x or keys[0], args.y or (keys[1] if len(keys) > 1 else None)
-            if y is None:
-                raise ValueError("--plot needs two keys: vary a second key or give --y")
-            for option, key in (("--x", x), ("--y", y)):
-                if key not in cases:
-                    raise ValueError(f"{option} {key}: not a varied key ({', '.join(keys)})")
-            numeric = [c for c in OUTCOME_COLUMNS if c not in ("outcome", "method", "message")] + keys
-            if args.value not in numeric:
-                raise ValueError(f"--value {args.value}: not a numeric column ({', '.join(numeric)})")
-        rows = run(base, cases, args.duration, args.sample_rate, args.max_steps, args.scheduler, args.workers,
+    except _core.InvalidParameter as error:
+        return fail(_blame(error, args, overrides, ranges))
+    value = args.value or "event_time"
+    if args.plot:  # checked before the sweep runs, not after
+        keys = list(cases)
+        x, y = args.x or keys[0], args.y or (keys[1] if len(keys) > 1 else None)
+        if y is None:
+            return fail("--plot: a map needs two keys: vary a second key or give --y")
+        for option, key in (("--x", x), ("--y", y)):
+            if key not in cases:
+                return fail(f"{option} {key}: not a varied key ({', '.join(keys)})")
+        if x == y:
+            return fail(f"--y {y}: the same key as --x (a map needs two)")
+        numeric = [c for c in OUTCOME_COLUMNS if c not in ("outcome", "method", "message")] + keys
+        if value not in numeric:
+            return fail(f"--value {value}: not a numeric column ({', '.join(numeric)})")
+    try:
+        client, own_client = _client(args.scheduler) if args.scheduler is not None else (None, False)
+    except ConnectionError as error:
+        return fail(f"--scheduler: {error}")
+    try:
+        rows = run(base, cases, settings.duration, settings.sample_rate, settings.max_steps, client, args.workers,
                    args.batch_size, progress=not args.no_progress)
+    except ConnectionError as error:
+        return fail(f"--scheduler: {error}")
     except (ValueError, _core.InvalidParameter) as error:
         return fail(error)
-    if args.output:
-        write(rows, args.output)
-    else:
-        rows.to_csv(sys.stdout, index=False)
+    finally:
+        if own_client:
+            client.close()
+
+    status = 0
+    try:
+        if args.output:
+            fmt = _cli.extension(args.output)
+            _cli.write_file("--output", args.output, _row_bytes(rows, fmt))
+        else:
+            _write_stdout(rows.to_csv(index=False))
+    except _cli.UsageError as error:
+        status = fail(f"{error}; {_keep(rows)}")
     if args.plot:
         from spinning_top import stability_map
 
-        stability_map.plot(rows, x, y, args.plot, value=args.value)
+        try:
+            stability_map.plot(rows, x, y, args.plot, value=value)
+        except ValueError as error:
+            status = fail(f"--plot: {error}")
     summary = rows["outcome"].value_counts().to_dict()
     hopped = int((rows["lift_offs"] > 0).sum())
     print(f"sweep: {len(rows)} cases: " + ", ".join(f"{v} {k}" for k, v in summary.items()) +
           (f"; the tip left the floor in {hopped}" if hopped else ""), file=sys.stderr)
-    return 0
+    return status
 
 
 if __name__ == "__main__":

@@ -75,14 +75,14 @@ class PlotBag(unittest.TestCase):
             f.write("garbage\n")
         result = subprocess.run(["rosrun", "spinning_top", "plot", "--bag", not_a_bag, "--no-show"],
                                 capture_output=True, text=True, timeout=120)
-        self.assertEqual(result.returncode, 1, result.stderr)
-        self.assertIn(f"plot: {not_a_bag}: ", result.stderr)
+        self.assertEqual(result.returncode, 2, result.stderr)
+        self.assertIn(f"plot: error: --bag: '{not_a_bag}' is not a ROS bag", result.stderr)
         self.assertNotIn("Traceback", result.stderr)
 
     def test_refuses_a_field_that_is_not_a_number(self):
         for field in ("nonsense", "event", "contact_point"):
             result = self.plot("--fields", field, "--output", os.path.join(self.directory, "bad.png"))
-            self.assertEqual(result.returncode, 1, field)
+            self.assertEqual(result.returncode, 2, field)
             self.assertIn(field, result.stderr)
         self.assertFalse(os.path.exists(os.path.join(self.directory, "bad.png")))
 
