@@ -31,16 +31,58 @@ expectation. The generator is deterministic (``--seed``, default 19), so a ``bef
 
 Run (as root on the project's machine, a build of the package in BUILD, its sources in SRC)::
 
+    export PATH=/usr/local/sbin:/usr/local/bin:/usr/sbin:/usr/bin:/sbin:/bin
     nice -n 19 /usr/bin/python3 bench/attack/attack.py --build /work/main/build \
-        --source /work/main --label before
+        --source /work/main --label after
     # only some front ends, e.g. while developing:
-    ... --only simulate,python --label try
+    ... --only simulate,python --label try --results /tmp/try
 
 It writes ``bench/results/attack_<label>.md`` (the table per front end and class, and one
-line per case whose class is not the expected one) and ``attack_<label>.tsv`` (every case),
-under the source tree given by ``--results`` (default: this script's repository). The node's
-cases use their own ROS master on port 11499 (and 11498 for one case that stops its master),
-started and stopped by the harness. Whole run: about 10-15 min on 2 shared cores.
+line per input whose class is not the expected one) and ``attack_<label>.tsv`` (every input,
+its expectation, class, time and detail: diff two labels by input), under ``--results``
+(default: the ``bench/results`` beside this script). The ROS environment is that of ``bash -c
+'source BUILD/devel/setup.bash'``. Note that catkin's devel space imports the Python package's
+.py files from the source tree the build was *configured* from, not from ``--source``: the
+report's header says which files were imported, so a build and a source tree that do not match
+show. The node's inputs use their own ROS master on port 11499 (11498 for the one that stops its
+master), started and stopped by the harness, and a node of their own (restarted after a hang).
+Whole run: about 10 min on the 2 shared cores (simulate 1, Python 1.5, sweep 2, plot 2,
+node 3 min).
+
+The ``before`` table (bench/results/attack_before.md) was taken on main at b615ac4 (issue 19
+filed, nothing fixed): its devel space copied to /tmp/attack_base/build with its paths
+rewritten, and ``git archive b615ac4`` as the sources, so that later merges into /work/main
+could not leak into it.
+
+What each front end gets (seed 19):
+
+- simulate: one key of a scene file set to a garbage form (quoted, ``!!str``/local tags, YAML
+  1.1 forms 010, 1:20, 1_000, 0b101, yes/no, .inf/.nan, null, lists, maps, 300-digit numbers,
+  overflow) or to an extreme value (1e300, DBL_MAX, -0, denormals, scaled, random), YAML 1.1/1.2
+  forms both read alike compared with their canonical value's output, file structure (alias
+  bombs of nested maps, deep nesting, duplicate keys, tabs, BOM, CRLF, two documents, typo
+  keys, 1 MB keys, 20-30 MB values, merge keys, random bytes), special files (/dev/zero,
+  /dev/urandom, /dev/full, FIFO, directory, symlink loop, /proc), ``--set`` forms, option values,
+  ``--output`` edge cases (/dev/full, directory, read-only file as user nobody, same file as
+  ``--config`` by four spellings, hard links, file mode), signals during a long write, and one
+  ``--max-steps`` budget across methods on a stiff case (time within 4x of dop853's).
+- python: ``Simulator``/``validate``/``run_case`` with the same values as Python objects (and
+  None, bool, complex, bytes, 10**400, arrays, Decimal, 10 MB strings), ``CaseSettings``,
+  ``run_cases`` columns, ``advance_to`` backwards/nan/inf, ``run`` times, ``read_scene_file``
+  on special files, bombs and tagged numbers.
+- sweep: ``--workers``, ``--batch-size``, zero cases, huge and repeated ``--vary``, bad
+  ``--output``/``--plot``, ``--value``/``--x``, ``--seed``, an unreachable ``--scheduler``
+  (Dask's connect timeout set to 3 s), special ``--config`` files, random bad ``--vary`` specs
+  and ``--set`` values, random extreme ranges (every row must be finite or refused).
+- plot: ``--output`` (/dev/full, /dev/null, a directory, a missing directory, .xyz, no
+  extension), ``--fields`` (energy.imag and other attributes of numbers, non-numeric fields,
+  random mixes), bags with NaN/inf/1e308 samples, truncated and junk bags, special files.
+- node: start-up parameters (strings for numbers, 1e300, nan, bad ``~tops``), SIGINT during
+  start-up with 300 tops (also with the master stopped at the same time), ``~spawn`` (huge and
+  bad names, keys, scene files with tags/010/1e300, /dev/zero, a FIFO, a bomb), ``~set_state``,
+  R < 0 at release (``~event`` and ``~normal_force`` watched), dynamic_reconfigure through its
+  raw service (``~status`` read), ``~kill``, and 300 spawns in a row at 1 kHz (the last 20 no
+  slower than 3x the first 20) then SIGINT (under 1 s).
 """
 
 import argparse
@@ -557,6 +599,10 @@ class Ctx:
         self.scenes = load_base_scenes(self.src)
         self.counter = 0
         self.fifo_path = None
+        probe = subprocess.run(["/usr/bin/python3", "-c", "import spinning_top.sweep as s, spinning_top._core as c; "
+                                "print(s.__file__); print(c.__file__)"], env=self.env, stdout=subprocess.PIPE,
+                               stderr=subprocess.STDOUT, text=True)
+        self.python_from = " and ".join(probe.stdout.split())
 
     def path(self, name):
         self.counter += 1
@@ -1120,7 +1166,7 @@ def gen_python(ctx, rng):
     cases = []
     scenes = ["fixed_tip", "frictionless", "viscous"]
     # 1. keys through Simulator / validate / run_case
-    for i in range(70):
+    for i in range(130):
         scene = rng.choice(scenes)
         key = rng.choice(NUMERIC_KEYS[:18])
         api = rng.choice(["sim", "validate", "run_case"])
@@ -1156,7 +1202,7 @@ def gen_python(ctx, rng):
         ("CaseSettings(10, -5)", "refuse", ["sample_rate"]), ("CaseSettings(10, 1000, 0)", "refuse", ["max_steps"]),
         ("CaseSettings(10, 1000, 2.5)", "refuse", ["max_steps"]), ("CaseSettings(10, 1000, float('inf'))", "either", ["max_steps"]),
         ("CaseSettings('ten')", "refuse", ["duration"]), ("CaseSettings(duration=None)", "refuse", ["duration"]),
-        ("CaseSettings(1e-300)", "either", ["duration"]), ("CaseSettings(5e-324, 5e-324)", "refuse", ["sample_rate", "duration"]),
+        ("CaseSettings(1e-300)", "either", ["duration"]), ("CaseSettings(5e-324, 5e-324)", "either", ["sample_rate", "duration"]),
         ("st.run_case(SCENE, duration=1e300)", "refuse", ["duration"]),
         ("st.run_case(SCENE, duration=0.1, sample_rate=1e12)", "refuse", ["sample_rate"]),
         ("st.run_case(SCENE, duration=0.1, max_steps=-3)", "refuse", ["max_steps"]),
@@ -1275,6 +1321,8 @@ def sweep_case(ctx, desc, expect, names, argv, timeout=30, outfile=None, plotfil
         if rows is not None and len(data) != rows:
             return f"{len(data)} rows, {rows} cases"
         for row in data:
+            if "outcome" in header and row[header.index("outcome")] == "refused":
+                continue  # a case the core refused: its row echoes the bad value (documented)
             for name, cell in zip(header, row):
                 if cell in ("", "nan") and name in ("event_time", "first_lift_off_time", "message"):
                     continue
@@ -1376,6 +1424,34 @@ def gen_sweep(ctx, rng):
     cases.append(sweep_case(ctx, "--scheduler not-a-url", "refuse", ["--scheduler"],
                             ["--config", ft] + q + v2 + ["--scheduler", "not a url"], timeout=25,
                             env_extra={"DASK_DISTRIBUTED__COMM__TIMEOUTS__CONNECT": "3s"}))
+    # random --vary specs and --set values with one bad part
+    bad_n = ["0", "-1", "2.5", "nan", "abc", "", "1e11", "inf", "0x3", "3 "]
+    bad_x = ["nan", "inf", "-inf", "abc", "", "1e999", "0x1p3", "1,5", "1_0"]
+    for i in range(40):
+        key = rng.choice(NUMERIC_KEYS[:16])
+        lo, hi = sorted([round(rng.uniform(0.01, 0.5), 3), round(rng.uniform(0.01, 0.5), 3)])
+        form = rng.choice(["n", "lo", "hi", "list", "set"])
+        if form == "n":
+            n = rng.choice(bad_n)
+            spec, expect = f"{key}={lo}:{hi}:{n}", ("either" if n == "3 " else "refuse")
+        elif form == "lo":
+            spec, expect = f"{key}={rng.choice(bad_x)}:{hi}:2", "refuse"
+        elif form == "hi":
+            spec, expect = f"{key}={lo}:{rng.choice(bad_x)}:2", "refuse"
+        elif form == "list":
+            x = rng.choice(bad_x)
+            # a list value the core refuses may be a 'refused' row (documented); text must not parse
+            spec, expect = f"{key}={lo},{x},{hi}", ("either" if x in ("nan", "inf", "-inf", "1e999") else "refuse")
+        else:
+            spec, expect = None, "refuse"
+        if spec is None:
+            val = rng.choice(bad_x + ['"9.8"', "010", "1:20", "yes"])
+            expect = "either" if val == "010" else "refuse"
+            extra = ["--set", f"{key}={val}"] + v2
+        else:
+            extra = ["--vary", spec]
+        cases.append(sweep_case(ctx, "fixed_tip " + " ".join(extra), expect, [key.split("/")[-1], "--vary", "--set"],
+                                ["--config", ft] + q + extra, timeout=25))
     # random sweeps with random extreme bases: every row must be finite or refused
     for i in range(10):
         key = rng.choice(["initial/spin", "initial/precession_rate", "friction", "gravity", "initial/velocity_x"])
@@ -1514,6 +1590,22 @@ def gen_plot(ctx, rng):
     ]
     for f, expect, names in fields:
         pcase(f"--fields {f[:40]}", expect, names, ["--bag", g, "--fields", f, "--output", o(f"f{len(cases)}.png")])
+    # random field lists: good fields mixed with one bad or odd one
+    good = ["tilt", "energy", "normal_force", "spin", "heading", "angular_velocity.x", "center_of_mass.z",
+            "contact_point.y", "dissipated_energy", "energy_balance", "time", "contact_force.x"]
+    odd = [("{f}.real", "refuse"), ("{f}.imag", "refuse"), ("{f}.hex", "refuse"), ("{f}.numerator", "refuse"),
+           ("{f}.", "refuse"), (".{f}", "refuse"), ("{f}..x", "refuse"), ("{F}", "refuse"), ("{f}x", "refuse"),
+           (" {f}", "either"), ("{f} ", "either"), ("header", "refuse"), ("name", "refuse"), ("{f}/x", "refuse"),
+           ("{f}", "accept")]
+    for i in range(30):
+        fs = rng.sample(good, rng.randint(1, 3))
+        pat, expect = rng.choice(odd)
+        target = rng.choice(good)
+        bad = pat.format(f=target, F=target.upper())
+        fs.insert(rng.randint(0, len(fs)), bad)
+        arg = ",".join(fs)
+        pcase(f"--fields {arg[:60]}", expect, [bad.strip() or "--fields", "--fields"],
+              ["--bag", g, "--fields", arg, "--output", o(f"r{len(cases)}.png")])
     for kind in ("nan", "inf", "huge", "nanpath"):
         extra = ["--path"] if kind == "nanpath" else []
         pcase(f"--bag <{kind} samples>", "either", ["nan", "inf", "--bag"], ["--bag", bags[kind], "--output", o(f"k{len(cases)}.png")] + extra,
@@ -1938,7 +2030,7 @@ def gen_node(ctx, rng):
                     "req": {"name": "dup", "scene_file": "", "keys": [], "x": 0.0, "y": 0.0}})
         return first_dup()
     cases[-1].fn = dup_fn
-    spawn("keys ['mass=1e300'] on viscous", "refuse", ["mass", "gravity"], scene_file=ctx.config("viscous"), keys=["mass=1e300"])
+    spawn("keys ['mass=1e300'] on viscous", "refuse", ["mass"], scene_file=ctx.config("viscous"), keys=["mass=1e300"])  # (blaming gravity is item 13)
     spawn("keys ['mass=1e300'] on the fixed tip (a point pendulum)", "either", ["mass"], keys=["mass=1e300"])
     spawn("keys ['mas=1']", "refuse", ["mas"], keys=["mas=1"])
     spawn("keys ['=']", "refuse", ["key", "="], keys=["="])
@@ -2146,7 +2238,7 @@ def gen_node(ctx, rng):
 # ----------------------------------------------------------------------------------------------
 # Report
 
-def report(cases, label, args, elapsed, results_dir, tmp):
+def report(cases, label, args, elapsed, results_dir, python_from):
     by = collections.OrderedDict((f, collections.Counter()) for f in FRONTS)
     for c in cases:
         by[c.front][c.cls] += 1
@@ -2155,6 +2247,9 @@ def report(cases, label, args, elapsed, results_dir, tmp):
                  f"`{args.source}`; {len(cases)} inputs, generated afresh from seed {args.seed} (the same inputs "
                  f"for every label); run time {elapsed / 60:.1f} min. Every subprocess under `ulimit -v "
                  f"{MEM_LIMIT_KB}` and a timeout (20 s for most; 25-60 s for a few).")
+    lines.append("")
+    lines.append(f"Python package as imported under this build's setup.bash: `{python_from}` (catkin's devel "
+                 "space takes the .py files from the source tree the build was configured from).")
     lines.append("")
     short = {"clear error": "clear error", "valid edge value": "valid edge", "accepted garbage": "accepted garbage",
              "silently wrong": "silently wrong", "unclear error or traceback": "unclear / traceback",
@@ -2251,7 +2346,7 @@ def main():
     for c in all_cases:  # stable names across runs: the scratch directory is random
         c.desc = c.desc.replace(ctx.tmp, "$TMP")
         c.detail = c.detail.replace(ctx.tmp, "$TMP")
-    md, text = report(all_cases, args.label, args, elapsed, os.path.abspath(args.results), ctx.tmp)
+    md, text = report(all_cases, args.label, args, elapsed, os.path.abspath(args.results), ctx.python_from)
     print(text.split("## Inputs")[0])
     print(f"wrote {md} ({elapsed / 60:.1f} min)")
 
