@@ -1,19 +1,45 @@
 // spinning_top_node: the ROS front end of the spinning-top simulator (see README.md, "The ROS node").
+#include <ros/callback_queue.h>
 #include <ros/ros.h>
+
+#include <csignal>
 
 #include "spinning_top/ros/spinning_top_node.hpp"
 
+namespace {
+
+void on_sigint(int) {
+  using spinning_top::ros_front_end::SpinningTopNode;
+  SpinningTopNode::request_stop();
+  if (!SpinningTopNode::started()) ros::requestShutdown();  // as roscpp's handler: ends a wait for the master too
+}
+
+}  // namespace
+
 int main(int argc, char** argv) {
-  ros::init(argc, argv, "spinning_top");
+  using spinning_top::ros_front_end::SpinningTopNode;
+  // Our own SIGINT handler (roscpp's would start its shutdown at once, in another thread): the
+  // start stops between two steps, and a running node unregisters its topics in one call to the
+  // master before ROS shuts down (a second with 1,000 tops instead of seconds).
+  ros::init(argc, argv, "spinning_top", ros::init_options::NoSigintHandler);
+  std::signal(SIGINT, on_sigint);
   // Held outside the try: destroying the last NodeHandle shuts ROS (and its logging) down,
   // and the fatal message below must still be printed.
   ros::NodeHandle nh, private_nh("~");
   try {
-    spinning_top::ros_front_end::SpinningTopNode node(nh, private_nh);
-    ros::spin();
+    SpinningTopNode node(nh, private_nh);
+    // ros::spin(), ending at SIGINT as well as at a shutdown from elsewhere (rosnode kill).
+    while (ros::ok() && !SpinningTopNode::stop_requested())
+      ros::getGlobalCallbackQueue()->callAvailable(ros::WallDuration(0.1));
+    if (SpinningTopNode::stop_requested() && ros::ok()) node.unregister_topics_at_once();
+    ros::shutdown();
   } catch (const spinning_top::InvalidParameter& error) {
     ROS_FATAL("spinning_top: invalid parameter ~%s (%s)", error.parameter().c_str(), error.what());
     return 1;
+  } catch (const spinning_top::ros_front_end::StartupInterrupted& interrupted) {
+    // SIGINT (or rosnode kill) during the start: nothing more is advertised or published.
+    ROS_INFO("spinning_top: %s; exiting", interrupted.what());
+    return 0;
   }
   return 0;
 }

@@ -15,6 +15,11 @@ namespace ros_front_end {
 namespace {
 
 constexpr double kMaxRate = 100000.0;  // [Hz] beyond this the tick cost alone exceeds the period
+// [Hz] below it a tick is more than 100 s of simulated time, and with the smallest real-time
+// factor its wall period (1 / (rate x factor)) leaves ros::WallDuration's range (1e-300 Hz threw
+// from the timer's set-up).
+constexpr double kMinRate = 0.01;
+constexpr double kMinRealTimeFactor = 1e-3;  // besides 0 (as fast as possible)
 // Beyond it the timer period 1 / (rate x factor) falls below 0.1 us at 1 kHz: "as fast as
 // possible" is 0, and a huge finite factor (1e300) asked for a period of 1e-303 s.
 constexpr double kMaxRealTimeFactor = 1e4;
@@ -69,7 +74,7 @@ std::vector<std::string> read_top_names(const ros::NodeHandle& nh) {
   std::set<std::string> seen;
   for (const std::string& name : names) {
     require_top_name("tops", name);
-    require(seen.insert(name).second, "tops", "'" + name + "' is listed twice");
+    require(seen.insert(name).second, "tops", "'" + name + "' is listed twice");  // valid: short
   }
   return names;
 }
@@ -81,30 +86,46 @@ const std::vector<std::string>& node_setting_keys() {
       "rate", "real_time_factor", "max_lag", "tick_budget", "publish_clock", "clock_rate", "tf_rate",
       "start_paused", "wait_for_subscriber", "world_frame", "body_frame", "contact_frame", "marker_rate", "trace_length",
       "trace_resolution", "force_scale", "energy_drift_warning", "energy_drift_error", "quaternion_norm_error",
-      "constraint_error", "late_tick_warning", "real_time_factor_warning", "tops", "reset_reads_parameters"};
+      "constraint_error", "late_tick_warning", "real_time_factor_warning", "tops", "reset_reads_parameters",
+      "scene_file", "overrides_file"};
   return keys;
 }
 
 void validate_pacing(double rate, double real_time_factor) {
-  require(std::isfinite(rate) && rate > 0.0 && rate <= kMaxRate, "rate", format("must lie in (0, %g] Hz", kMaxRate));
-  require(std::isfinite(real_time_factor) && real_time_factor >= 0.0 && real_time_factor <= kMaxRealTimeFactor,
-          "real_time_factor", format("must lie in [0, %g] (0 = as fast as possible)", kMaxRealTimeFactor));
+  require(std::isfinite(rate) && rate >= kMinRate && rate <= kMaxRate, "rate",
+          format("must lie in [%g, ", kMinRate) + format("%g] Hz", kMaxRate) + format(", got %.6g", rate));
+  require(std::isfinite(real_time_factor) &&
+              (real_time_factor == 0.0 || (real_time_factor >= kMinRealTimeFactor && real_time_factor <= kMaxRealTimeFactor)),
+          "real_time_factor",
+          format("must be 0 (as fast as possible) or lie in [%g, ", kMinRealTimeFactor) +
+              format("%g]", kMaxRealTimeFactor) + format(", got %.6g", real_time_factor));
 }
 
 void require_frame(const std::string& key, const std::string& frame) {
   require(!frame.empty(), key, "must not be empty");
-  require(frame[0] != '/', key, "'" + frame + "' must not start with '/' (tf2 frame ids have no leading slash)");
+  require(frame[0] != '/', key, "'" + excerpt(frame) + "' must not start with '/' (tf2 frame ids have no leading slash)");
   // ROS names' characters (a letter first, then letters, digits, '_' and '/' between names): what
   // tf2, URDF and rviz handle everywhere; a space or a '-' breaks tools that parse frame lists.
   require(name_characters(frame, true) && frame.back() != '/' && frame.find("//") == std::string::npos, key,
-          "'" + frame + "' is not a valid frame id: a letter, then letters, digits, '_' and '/' "
+          "'" + excerpt(frame) + "' is not a valid frame id: a letter, then letters, digits, '_' and '/' "
           "between names (REP-105 names such as world, top)");
 }
 
 void require_top_name(const std::string& key, const std::string& name) {
+  require(name.size() <= kMaxTopNameLength, key,
+          "'" + excerpt(name) + "' is not a valid top name: at most " + std::to_string(kMaxTopNameLength) +
+              " characters (it prefixes the top's frames, topics and services)");
   require(name_characters(name, false), key,
-          "'" + name + "' is not a valid top name: a letter, then letters, digits and '_' (it prefixes the "
+          "'" + excerpt(name) + "' is not a valid top name: a letter, then letters, digits and '_' (it prefixes the "
           "top's frames, topics and services)");
+}
+
+std::string excerpt(const std::string& text, std::size_t limit) {
+  std::string shown = text.substr(0, limit);
+  for (char& c : shown)
+    if (std::iscntrl(static_cast<unsigned char>(c))) c = '?';
+  if (text.size() > limit) shown += "... (" + std::to_string(text.size()) + " characters)";
+  return shown;
 }
 
 NodeSettings read_node_settings(const ros::NodeHandle& nh) {

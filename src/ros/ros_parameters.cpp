@@ -1,9 +1,15 @@
 #include "spinning_top/ros/ros_parameters.hpp"
 
+#include "spinning_top/ros/node_settings.hpp"
+
 #include <xmlrpcpp/XmlRpcValue.h>
 
+#include <ros/param.h>
+
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
+#include <functional>
 
 namespace spinning_top {
 namespace ros_front_end {
@@ -21,12 +27,6 @@ const char* type_name(XmlRpc::XmlRpcValue::Type type) {
   }
 }
 
-std::string number_text(double value) {
-  char buffer[32];
-  std::snprintf(buffer, sizeof buffer, "%.17g", value);  // round-trips every double exactly
-  return buffer;
-}
-
 /// Whether a key's documented default is a number (then the key takes numbers).
 bool is_number(const char* text) {
   char* end = nullptr;
@@ -40,16 +40,16 @@ std::string numeric_text_hint(const XmlRpc::XmlRpcValue& value) {
   if (value.getType() != XmlRpc::XmlRpcValue::TypeString) return "";
   const std::string text = static_cast<std::string>(const_cast<XmlRpc::XmlRpcValue&>(value));
   if (!is_number(text.c_str())) return "";
-  std::string hint = "; '" + text + "' is text";
+  std::string hint = "; '" + excerpt(text) + "' is text";
   if (text.find_first_of("eE") != std::string::npos && text.find('.') == std::string::npos)
     hint += " because YAML 1.1 (rosparam) reads an exponent without a dot as a string: write it with a dot, "
             "e.g. 1.0e-8";
   return hint;
 }
 
-}  // namespace
+using Lookup = std::function<bool(const std::string& key, XmlRpc::XmlRpcValue& value)>;
 
-ParameterMap read_scene_parameters(const ros::NodeHandle& private_nh) {
+ParameterMap read_scene_parameters(const Lookup& get) {
   ParameterMap values;
   // A group of keys (initial/...) given as anything but a dictionary (`initial: 5`) would hide
   // its keys, which would then silently take their defaults.
@@ -59,14 +59,14 @@ ParameterMap read_scene_parameters(const ros::NodeHandle& private_nh) {
     if (slash == std::string::npos) continue;
     const std::string group = key.substr(0, slash);
     XmlRpc::XmlRpcValue value;
-    if (private_nh.getParam(group, value) && value.getType() != XmlRpc::XmlRpcValue::TypeStruct)
+    if (get(group, value) && value.getType() != XmlRpc::XmlRpcValue::TypeStruct)
       throw InvalidParameter(group, std::string("is ") + type_name(value.getType()) + ", expected a dictionary of " +
                                         group + "/... keys (e.g. " + key + ")");
   }
   for (const ParameterSpec& spec : parameter_specs()) {
     XmlRpc::XmlRpcValue value;
-    if (!private_nh.getParam(spec.key, value)) continue;
-    const bool is_text = !is_number(spec.default_value.c_str());  // scene, integrator: names
+    if (!get(spec.key, value)) continue;
+    const bool is_text = !takes_number(spec);  // scene, integrator: names
     switch (value.getType()) {
       case XmlRpc::XmlRpcValue::TypeDouble:
         if (!is_text) { values[spec.key] = number_text(static_cast<double>(value)); continue; }
@@ -88,13 +88,81 @@ ParameterMap read_scene_parameters(const ros::NodeHandle& private_nh) {
   return values;
 }
 
-double read_number(const ros::NodeHandle& private_nh, const std::string& key, double default_value) {
-  XmlRpc::XmlRpcValue value;
-  if (!private_nh.getParam(key, value)) return default_value;
+double number_of(const std::string& key, const XmlRpc::XmlRpcValue& given) {
+  XmlRpc::XmlRpcValue& value = const_cast<XmlRpc::XmlRpcValue&>(given);
   if (value.getType() == XmlRpc::XmlRpcValue::TypeDouble) return static_cast<double>(value);
   if (value.getType() == XmlRpc::XmlRpcValue::TypeInt) return static_cast<int>(value);
   throw InvalidParameter(key, std::string("is ") + type_name(value.getType()) + ", expected a number" +
                                   numeric_text_hint(value));
+}
+
+}  // namespace
+
+std::string number_text(double value) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, "%.17g", value);  // round-trips every double exactly
+  return buffer;
+}
+
+bool takes_number(const ParameterSpec& spec) { return is_number(spec.default_value.c_str()); }
+
+ParameterTree ParameterTree::fetch(const std::string& ns) {
+  ParameterTree tree;
+  XmlRpc::XmlRpcValue value;
+  if (ros::param::get(ns, value) && value.getType() == XmlRpc::XmlRpcValue::TypeStruct) tree.root_ = value;
+  return tree;
+}
+
+ParameterTree ParameterTree::fetch_members(const std::string& ns, const std::vector<std::string>& names) {
+  ParameterTree tree;
+  for (const std::string& name : names) {
+    XmlRpc::XmlRpcValue value;
+    if (ros::param::get(ns + "/" + name, value)) tree.root_[name] = value;
+  }
+  return tree;
+}
+
+bool ParameterTree::get(const std::string& key, XmlRpc::XmlRpcValue& value) const {
+  // Walked by pointer: a copy of an XmlRpcValue copies its whole tree. operator[] is not const,
+  // but on a member that exists it only looks it up.
+  XmlRpc::XmlRpcValue* node = const_cast<XmlRpc::XmlRpcValue*>(&root_);
+  std::size_t begin = 0;
+  while (begin <= key.size()) {
+    const std::size_t slash = std::min(key.find('/', begin), key.size());
+    const std::string part = key.substr(begin, slash - begin);
+    if (node->getType() != XmlRpc::XmlRpcValue::TypeStruct || !node->hasMember(part)) return false;
+    node = &(*node)[part];
+    begin = slash + 1;
+  }
+  value = *node;
+  return true;
+}
+
+ParameterTree ParameterTree::sub(const std::string& key) const {
+  ParameterTree tree;
+  XmlRpc::XmlRpcValue value;
+  if (get(key, value) && value.getType() == XmlRpc::XmlRpcValue::TypeStruct) tree.root_ = value;
+  return tree;
+}
+
+ParameterMap read_scene_parameters(const ros::NodeHandle& private_nh) {
+  return read_scene_parameters([&](const std::string& key, XmlRpc::XmlRpcValue& value) {
+    return private_nh.getParam(key, value);
+  });
+}
+
+ParameterMap read_scene_parameters(const ParameterTree& tree) {
+  return read_scene_parameters([&](const std::string& key, XmlRpc::XmlRpcValue& value) { return tree.get(key, value); });
+}
+
+double read_number(const ros::NodeHandle& private_nh, const std::string& key, double default_value) {
+  XmlRpc::XmlRpcValue value;
+  return private_nh.getParam(key, value) ? number_of(key, value) : default_value;
+}
+
+double read_number(const ParameterTree& tree, const std::string& key, double default_value) {
+  XmlRpc::XmlRpcValue value;
+  return tree.get(key, value) ? number_of(key, value) : default_value;
 }
 
 std::string read_string(const ros::NodeHandle& private_nh, const std::string& key,

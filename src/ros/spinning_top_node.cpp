@@ -1,12 +1,21 @@
 #include "spinning_top/ros/spinning_top_node.hpp"
 
+#include <ros/callback_queue.h>
+#include <ros/master.h>
+#include <ros/publication.h>
+#include <ros/this_node.h>
+#include <ros/topic_manager.h>
+#include <ros/xmlrpc_manager.h>
 #include <rosgraph_msgs/Clock.h>
+#include <xmlrpcpp/XmlRpcClient.h>
 #include <std_msgs/String.h>
+#include <tf2_msgs/TFMessage.h>
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <set>
 
 #include "spinning_top/ros/live_keys.hpp"
 #include "spinning_top/ros/ros_parameters.hpp"
@@ -17,6 +26,11 @@ namespace ros_front_end {
 namespace {
 
 constexpr double kAsFastAsPossibleSlice = 1e-3;  // [s] wall time per timer callback when rtf = 0
+// Bounds of a ~spawn request: a path (PATH_MAX), key=value assignments and their values (a
+// number or a name; simulate's --set takes the same).
+constexpr std::size_t kMaxPathLength = 4096;
+constexpr std::size_t kMaxSpawnKeys = 256;
+constexpr std::size_t kMaxValueLength = 100;
 
 std::string format(const char* pattern, double value) {
   char buffer[160];
@@ -32,21 +46,24 @@ WorkBudget budget_until(ros::WallTime deadline) {
 }
 
 long ticks_per(double rate, double publication_rate) {
-  return publication_rate > 0.0 ? std::max(1L, std::lround(rate / publication_rate)) : 1L;
+  // At most one publication per 1e9 ticks (a publication rate of 1e-300 Hz is "never" enough).
+  return publication_rate > 0.0 ? std::max(1L, std::lround(std::min(rate / publication_rate, 1e9))) : 1L;
 }
 
 /// Keys of our private namespace that nobody reads (typos such as ~mas): warned about, not
 /// fatal, since other tools may store things there.
 void warn_about_unknown_keys(const ros::NodeHandle& private_nh, const std::vector<std::string>& top_names) {
-  std::vector<std::string> known = parameter_keys();
-  for (const std::string& key : node_setting_keys()) known.push_back(key);
-  for (const LiveKey& key : live_keys()) known.push_back(key.name);  // e.g. spin (the scene's: initial/spin)
-  known.push_back("robot_description");  // the node writes it (a URDF of the top)
+  std::vector<std::string> own = parameter_keys();  // what a near miss is compared with
+  for (const std::string& key : node_setting_keys()) own.push_back(key);
+  for (const LiveKey& key : live_keys()) own.push_back(key.name);  // e.g. spin (the scene's: initial/spin)
+  own.push_back("robot_description");  // the node writes it (a URDF of the top)
+  std::set<std::string> known(own.begin(), own.end());
+  for (const std::string& key : parameter_keys()) known.insert("scene_file_values/" + key);  // its write-back
   for (const std::string& name : top_names) {
-    for (const std::string& key : parameter_keys()) known.push_back(name + "/" + key);
-    known.push_back(name + "/x");
-    known.push_back(name + "/y");
-    known.push_back(name + "/robot_description");
+    for (const std::string& key : parameter_keys()) known.insert(name + "/" + key);
+    known.insert(name + "/x");
+    known.insert(name + "/y");
+    known.insert(name + "/robot_description");
   }
   std::vector<std::string> names;
   if (!ros::param::getParamNames(names)) return;
@@ -54,20 +71,43 @@ void warn_about_unknown_keys(const ros::NodeHandle& private_nh, const std::vecto
   for (const std::string& name : names) {
     if (name.compare(0, prefix.size(), prefix) != 0) continue;
     const std::string key = name.substr(prefix.size());
-    if (std::find(known.begin(), known.end(), key) != known.end()) continue;
-    const std::string nearest = nearest_name(key, known);
+    if (known.count(key) > 0) continue;
+    const std::size_t slash = key.find('/');  // ~<top>/<key>: compared with the scene's keys
+    const bool of_top = slash != std::string::npos &&
+                        std::find(top_names.begin(), top_names.end(), key.substr(0, slash)) != top_names.end();
+    const std::string nearest =
+        of_top ? nearest_name(key.substr(slash + 1), parameter_keys()) : nearest_name(key, own);
     if (nearest.empty())
-      ROS_WARN("spinning_top: ignoring unknown parameter %s", name.c_str());
+      ROS_WARN("spinning_top: ignoring unknown parameter %s", excerpt(name, 200).c_str());
     else
-      ROS_WARN("spinning_top: ignoring unknown parameter %s (did you mean ~%s?)", name.c_str(), nearest.c_str());
+      ROS_WARN("spinning_top: ignoring unknown parameter %s (did you mean ~%s%s?)", excerpt(name, 200).c_str(),
+               of_top ? key.substr(0, slash + 1).c_str() : "", nearest.c_str());
   }
 }
 
-/// The first changed live key that a top keeps (what a refusal of the change names).
-std::string first_changed_key(const SpinningTopConfig& config, const SpinningTopConfig& old) {
-  for (const LiveKey& key : live_keys())
-    if (key.in_top != nullptr && config.*key.field != old.*key.field) return key.name;
-  return "gravity";
+/// Whether two texts of a scene key's value give the same value (numbers compared as numbers).
+bool same_value(const std::string& key, const std::string& a, const std::string& b) {
+  if (a == b) return true;
+  for (const ParameterSpec& spec : parameter_specs())
+    if (spec.key == key && takes_number(spec)) {
+      try {
+        return parse_number(key, a) == parse_number(key, b);
+      } catch (const InvalidParameter&) {
+        return false;
+      }
+    }
+  return false;
+}
+
+/// The members of the private namespace that hold the node's own scene keys (for a read of them
+/// alone, without every top's URDF).
+std::vector<std::string> node_key_members() {
+  std::set<std::string> members = {"scene_file", "overrides_file", "scene_file_values"};
+  for (const ParameterSpec& spec : parameter_specs()) {
+    const std::string key = spec.key;
+    members.insert(key.substr(0, key.find('/')));
+  }
+  return {members.begin(), members.end()};
 }
 
 /// The reason of an InvalidParameter without its "key: " prefix.
@@ -77,16 +117,40 @@ std::string reason_of(const InvalidParameter& error) {
   return what.size() >= skip ? what.substr(skip) : what;
 }
 
+/// The live keys held by tops that a change changes and that apply to `top` (applies_to()).
+std::vector<std::string> changes_for(const SceneConfig& top, const SpinningTopConfig& config,
+                                     const SpinningTopConfig& old) {
+  std::vector<std::string> names;
+  for (const LiveKey& key : live_keys())
+    if (key.in_top != nullptr && config.*key.field != old.*key.field && applies_to(key, top)) names.push_back(key.name);
+  return names;
+}
+
+/// A refusal of a live change names a key the change changed: the core names the key of the
+/// quantity it checks (the pendulum rate sqrt(m g h / A) is "gravity"'s), which need not be the
+/// one changed (a mass of 1e300).
+InvalidParameter blame(const InvalidParameter& error, const std::vector<std::string>& changed) {
+  std::string key = error.parameter();
+  if (key == "initial/spin") key = "spin";  // the live key's name
+  if (changed.empty() || std::find(changed.begin(), changed.end(), key) != changed.end())
+    return InvalidParameter(key, reason_of(error));
+  return InvalidParameter(changed.front(), "refused by the check of " + error.parameter() + ": " + reason_of(error));
+}
+
+
 }  // namespace
 
 SpinningTopNode::SpinningTopNode(ros::NodeHandle nh, ros::NodeHandle private_nh)
     : nh_(nh), private_nh_(private_nh), settings_(read_node_settings(private_nh)),
       clock_(settings_.rate, settings_.real_time_factor) {
   // Everything is read and validated before anything is advertised (a TopInstance validates its
-  // configuration before it advertises).
-  const std::vector<std::pair<std::string, SceneConfig>> configs = read_tops();
+  // configuration before it advertises): the private namespace in one call, however many tops.
+  stop_if_shutting_down("reading the parameters");
+  const ParameterTree tree = ParameterTree::fetch(private_nh_.getNamespace());
+  NodeKeys node_keys;
+  const std::vector<std::pair<std::string, SceneConfig>> configs = read_tops(tree, node_keys);
   std::vector<Eigen::Vector2d> positions;
-  for (const auto& named : configs) positions.push_back(read_tip_position(named.first));
+  for (const auto& named : configs) positions.push_back(read_tip_position(tree, named.first));
   warn_about_unknown_keys(private_nh_, settings_.tops);
   paused_ = settings_.start_paused;
   waiting_for_subscriber_ = settings_.wait_for_subscriber;
@@ -95,26 +159,26 @@ SpinningTopNode::SpinningTopNode(ros::NodeHandle nh, ros::NodeHandle private_nh)
   // see current transforms at real_time_factor 1.
   stamp_origin_ = ros::Time::isSimTime() ? ros::Time(0, 0) : ros::Time::now();
   last_stamp_ = stamp_origin_;
-
-  // dynamic_reconfigure starts from what is on the parameter server: put the effective
-  // values there (the scene's documented defaults included), so its first callback
-  // changes nothing. With several tops, the first one's.
-  SceneConfig first = configs.front().second;
-  for (const LiveKey& key : live_keys())
-    private_nh_.setParam(key.name, key.in_top != nullptr ? *key.in_top(first) : *key.in_node(settings_));
+  stop_if_shutting_down("writing the parameters");
+  write_back(node_keys);
 
   // A /clock subscriber (every sim-time node) may fall behind by a few callbacks at 1 kHz.
   if (settings_.publish_clock) clock_publisher_ = nh_.advertise<rosgraph_msgs::Clock>("/clock", 100);
   status_publisher_ = private_nh_.advertise<std_msgs::String>("status", 1, /*latch=*/true);
-  tf_broadcaster_ = std::make_unique<tf2_ros::TransformBroadcaster>();
+  tf_publisher_ = nh_.advertise<tf2_msgs::TFMessage>("/tf", 100);
+  static_publisher_ = nh_.advertise<tf2_msgs::TFMessage>("/tf_static", 100, /*latch=*/true);
   diagnostics_ = std::make_unique<diagnostic_updater::Updater>(nh_, private_nh_);
-  diagnostics_->setHardwareID("spinning_top/" + std::string(to_string(first.scene)));
+  diagnostics_->setHardwareID("spinning_top/" + std::string(to_string(configs.front().second.scene)));
   diagnostics_->add("simulation", this, &SpinningTopNode::diagnose);
 
-  for (std::size_t i = 0; i < configs.size(); ++i)
+  for (std::size_t i = 0; i < configs.size(); ++i) {
+    stop_if_shutting_down("starting the tops");  // each top advertises its topics and services
     add_top(std::make_unique<TopInstance>(configs[i].first, configs[i].second, positions[i], settings_, private_nh_,
                                           clock_.time(), stamp_of()));
+  }
+  send_static_transforms();
 
+  stop_if_shutting_down("advertising the services");
   reset_service_ = private_nh_.advertiseService("reset", &SpinningTopNode::on_reset, this);
   reload_service_ = private_nh_.advertiseService("reload", &SpinningTopNode::on_reload, this);
   pause_service_ = private_nh_.advertiseService("pause", &SpinningTopNode::on_pause, this);
@@ -124,9 +188,46 @@ SpinningTopNode::SpinningTopNode(ros::NodeHandle nh, ros::NodeHandle private_nh)
   kill_service_ = private_nh_.advertiseService("kill", &SpinningTopNode::on_kill, this);
   set_state_service_ = private_nh_.advertiseService("set_state", &SpinningTopNode::on_set_state, this);
 
-  reconfigure_server_ = std::make_unique<dynamic_reconfigure::Server<SpinningTopConfig>>(private_nh_);
-  reconfigure_server_->setCallback([this](SpinningTopConfig& c, uint32_t level) { reconfigure(c, level); });
+  // dynamic_reconfigure starts from the effective values: the node's own keys (those its tops
+  // inherit; the scene's documented defaults included) and its pacing. A live key that does not
+  // apply to the node's own scene (friction outside the viscous one) stays off ~, so that its
+  // own keys stay valid for ~reload and ~spawn while the tops it applies to take it.
+  SpinningTopConfig initial = SpinningTopConfig::__getDefault__();
+  {
+    SceneConfig own = SceneConfig{};
+    for (const LiveKey& key : live_keys()) {
+      if (key.in_node != nullptr) {
+        initial.*key.field = *key.in_node(settings_);
+        continue;
+      }
+      const auto it = node_keys.keys.find(key.scene_key);
+      initial.*key.field = *key.in_top(own);  // the documented default
+      try {
+        if (it != node_keys.keys.end()) initial.*key.field = parse_number(key.scene_key, it->second);
+      } catch (const InvalidParameter&) {
+        // Not a number at the node's level: every named top overrides it (each was validated).
+      }
+    }
+  }
+  stop_if_shutting_down("starting dynamic_reconfigure");
+  reconfigure_server_ = std::make_unique<ReconfigureServer>(
+      private_nh_, initial, [this](SpinningTopConfig& c, std::uint32_t level) { reconfigure(c, level); },
+      [this](const std::string& why) {
+        ROS_ERROR("spinning_top: dynamic_reconfigure update refused: %s. The previous configuration stays.",
+                  why.c_str());
+        report("refused: " + why);
+      },
+      [this](const std::string& name) {
+        for (const LiveKey& key : live_keys())
+          if (name == key.name && key.in_top != nullptr) {
+            SceneConfig own;
+            own.scene = node_scene_;
+            return applies_to(key, own);
+          }
+        return true;
+      });
 
+  stop_if_shutting_down("starting the timers");
   // The pacing and the wall-clock stamps start together, after the set-up above (advertising
   // and the reconfigure server take tens of ms): tick n is due at the wall time it is stamped.
   window_wall_start_ = ros::WallTime::now();
@@ -134,15 +235,126 @@ SpinningTopNode::SpinningTopNode(ros::NodeHandle nh, ros::NodeHandle private_nh)
   if (!ros::Time::isSimTime()) last_stamp_ = stamp_origin_ = ros::Time(window_wall_start_.sec, window_wall_start_.nsec);
   restart_timer();
   diagnostics_timer_ = nh_.createWallTimer(ros::WallDuration(1.0), &SpinningTopNode::on_diagnostics_timer, this);
-  for (const auto& top : tops_)
-    ROS_INFO("spinning_top: %s%sscene %s, integrator %s", top->name().c_str(), top->name().empty() ? "" : ": ",
-             to_string(top->simulator().config().scene), top->simulator().integrator_description().c_str());
+  if (tops_.size() <= 10) {  // with more, one line for all
+    for (const auto& top : tops_)
+      ROS_INFO("spinning_top: %s%sscene %s, integrator %s", top->name().c_str(), top->name().empty() ? "" : ": ",
+               to_string(top->simulator().config().scene), top->simulator().integrator_description().c_str());
+  }
   ROS_INFO("spinning_top: %zu top%s, %g Hz, real-time factor %g%s", tops_.size(), tops_.size() == 1 ? "" : "s",
            settings_.rate, settings_.real_time_factor, paused_ ? " (paused)" : "");
+  started_ = 1;
 }
 
-std::vector<std::pair<std::string, SceneConfig>> SpinningTopNode::read_tops() const {
-  const ParameterMap own = read_scene_parameters(private_nh_);
+volatile std::sig_atomic_t SpinningTopNode::stop_requested_ = 0;
+volatile std::sig_atomic_t SpinningTopNode::started_ = 0;
+
+void SpinningTopNode::stop_if_shutting_down(const char* step) {
+  if (ros::ok() && !ros::isShuttingDown() && !stop_requested()) return;
+  // Unwinding destroys every publisher made so far: after the shutdown that costs nothing.
+  ros::shutdown();
+  throw StartupInterrupted(std::string("shut down while ") + step);
+}
+
+void SpinningTopNode::unregister_topics_at_once() {
+  std::vector<std::string> topics;
+  ros::this_node::getAdvertisedTopics(topics);
+  if (topics.empty()) return;
+  XmlRpc::XmlRpcValue calls;
+  for (std::size_t i = 0; i < topics.size(); ++i) {
+    XmlRpc::XmlRpcValue& call = calls[static_cast<int>(i)];
+    call["methodName"] = std::string("unregisterPublisher");
+    XmlRpc::XmlRpcValue& arguments = call["params"];
+    arguments[0] = ros::this_node::getName();
+    arguments[1] = topics[i];
+    arguments[2] = ros::XMLRPCManager::instance()->getServerURI();
+  }
+  const ros::WallTime start = ros::WallTime::now();
+  XmlRpc::XmlRpcValue parameters, result;
+  parameters[0] = calls;
+  XmlRpc::XmlRpcClient client(ros::master::getHost().c_str(), static_cast<int>(ros::master::getPort()), "/");
+  const bool done = client.execute("system.multicall", parameters, result) && !client.isFault() &&
+                    result.getType() == XmlRpc::XmlRpcValue::TypeArray &&
+                    result.size() == static_cast<int>(topics.size());
+  client.close();
+  if (!done) return;  // roscpp's shutdown unregisters them, one call each
+  for (const std::string& topic : topics) {
+    const ros::PublicationPtr publication = ros::TopicManager::instance()->lookupPublication(topic);
+    if (publication) publication->drop();  // roscpp's shutdown skips a dropped publication
+  }
+  ROS_INFO("spinning_top: %zu topics unregistered from the master in one call (%.3f s)", topics.size(),
+           (ros::WallTime::now() - start).toSec());
+}
+
+NodeKeys SpinningTopNode::read_node_keys(const ParameterTree& own) const {
+  NodeKeys result;
+  XmlRpc::XmlRpcValue value;
+  // The files: read as every front end reads a scene file (the core's reader, YAML 1.2), so that
+  // one file describes one top everywhere; the overrides file's keys replace the scene file's.
+  for (const char* key : {"scene_file", "overrides_file"}) {
+    if (!own.get(key, value)) continue;
+    if (value.getType() != XmlRpc::XmlRpcValue::TypeString)
+      throw InvalidParameter(key, "must be a string: the path of a scene file (YAML)");
+    const std::string path = static_cast<std::string>(value);
+    if (path.empty()) continue;  // the launch file's "no overrides"
+    result.files = true;
+    try {
+      for (const auto& [k, v] : read_scene_file(path)) result.from_files[k] = v;
+    } catch (const SceneFileError& error) {
+      throw InvalidParameter(key, error.what());
+    }
+  }
+  const ParameterMap explicit_keys = read_scene_parameters(own);  // throws naming the key
+  if (!result.files) {
+    result.keys = explicit_keys;
+    return result;
+  }
+  for (const ParameterSpec& spec : parameter_specs())
+    if (result.from_files.count(spec.key) == 0) result.from_files[spec.key] = spec.default_value;
+  // What the node wrote back the last time (this run's or a previous one's): a private key that
+  // still holds it is not an explicit override, so that the files' values (read again) win.
+  ParameterMap written;
+  try {
+    written = read_scene_parameters(own.sub("scene_file_values"));
+  } catch (const InvalidParameter&) {
+    written.clear();  // not ours: then every private key is explicit
+  }
+  result.keys = result.from_files;
+  for (const auto& [key, text] : explicit_keys) {
+    const auto was = written.find(key);
+    if (was != written.end() && same_value(key, was->second, text)) continue;
+    result.keys[key] = text;
+  }
+  return result;
+}
+
+void SpinningTopNode::write_back(const NodeKeys& node_keys) {
+  try {
+    node_scene_ = parse_scene(node_keys.keys.count("scene") ? node_keys.keys.at("scene") : "fixed_tip");
+  } catch (const InvalidParameter&) {
+    node_scene_ = SceneType::kFixedTip;  // the tops override it; each top's own scene was validated
+  }
+  if (!node_keys.files) return;
+  for (const ParameterSpec& spec : parameter_specs()) {
+    const std::string& now = node_keys.keys.at(spec.key);
+    const std::string& from_files = node_keys.from_files.at(spec.key);
+    try {
+      if (takes_number(spec)) {
+        private_nh_.setParam(spec.key, parse_number(spec.key, now));
+        private_nh_.setParam(std::string("scene_file_values/") + spec.key, parse_number(spec.key, from_files));
+      } else {
+        private_nh_.setParam(spec.key, now);
+        private_nh_.setParam(std::string("scene_file_values/") + spec.key, from_files);
+      }
+    } catch (const InvalidParameter&) {
+      // Not a number: only where a named top overrides the key (each top's keys were validated).
+    }
+  }
+}
+
+std::vector<std::pair<std::string, SceneConfig>> SpinningTopNode::read_tops(const ParameterTree& tree,
+                                                                           NodeKeys& node_keys) const {
+  node_keys = read_node_keys(tree);
+  const ParameterMap& own = node_keys.keys;
   std::vector<std::pair<std::string, SceneConfig>> configs;
   if (settings_.tops.empty()) {
     configs.emplace_back("", parse_scene_config(own, /*require_all=*/false));
@@ -151,7 +363,7 @@ std::vector<std::pair<std::string, SceneConfig>> SpinningTopNode::read_tops() co
   for (const std::string& name : settings_.tops) {
     ParameterMap keys = own;  // ~<name>/key over ~key
     try {
-      for (const auto& [key, value] : read_scene_parameters(ros::NodeHandle(private_nh_, name))) keys[key] = value;
+      for (const auto& [key, value] : read_scene_parameters(tree.sub(name))) keys[key] = value;
       configs.emplace_back(name, parse_scene_config(keys, /*require_all=*/false));
     } catch (const InvalidParameter& error) {
       throw InvalidParameter(name + "/" + error.parameter(), reason_of(error));
@@ -160,15 +372,15 @@ std::vector<std::pair<std::string, SceneConfig>> SpinningTopNode::read_tops() co
   return configs;
 }
 
-Eigen::Vector2d SpinningTopNode::read_tip_position(const std::string& name) const {
+Eigen::Vector2d SpinningTopNode::read_tip_position(const ParameterTree& tree, const std::string& name) const {
   Eigen::Vector2d xy = Eigen::Vector2d::Zero();
   if (name.empty()) return xy;  // the node's own top starts at the origin
-  const ros::NodeHandle top_nh(private_nh_, name);
+  const ParameterTree top = tree.sub(name);
   const char* const keys[] = {"x", "y"};
   for (int i = 0; i < 2; ++i) {
     const std::string key = name + "/" + keys[i];
     try {
-      xy[i] = read_number(top_nh, keys[i], 0.0);
+      xy[i] = read_number(top, keys[i], 0.0);
     } catch (const InvalidParameter& error) {
       throw InvalidParameter(key, reason_of(error));
     }
@@ -199,7 +411,6 @@ void SpinningTopNode::add_top(std::unique_ptr<TopInstance> top) {
         };
     top_reset_services_.push_back(private_nh_.advertiseService(name + "/reset", reset));
   }
-  send_static_transforms();
 }
 
 TopInstance* SpinningTopNode::find_top(const std::string& name) {
@@ -212,14 +423,29 @@ void SpinningTopNode::send_static_transforms() {
   std::vector<geometry_msgs::TransformStamped> transforms;
   for (const auto& top : tops_)
     if (top->contact_is_static()) transforms.push_back(top->contact_transform(last_stamp_));
-  // A fresh broadcaster: tf2_ros's keeps every frame it was ever sent in its latched message, so
-  // a killed top's pivot would reach later subscribers (tf2 cannot remove a static frame from
-  // a listener that already has it).
-  if (transforms.empty() && !static_sent_) return;  // nothing static, now or before
-  auto broadcaster = std::make_unique<tf2_ros::StaticTransformBroadcaster>();
-  broadcaster->sendTransform(transforms);
-  static_broadcaster_ = std::move(broadcaster);
-  static_sent_ = true;
+  // Published when the pivots change (a top with one spawned, killed, placed elsewhere), not at
+  // every call: a spawn costs the same however many pivots exist. The latched message is the
+  // whole set (a late subscriber gets only it), so a killed top's pivot leaves it.
+  auto same = [](const geometry_msgs::TransformStamped& a, const geometry_msgs::TransformStamped& b) {
+    return a.child_frame_id == b.child_frame_id && a.header.frame_id == b.header.frame_id &&
+           a.transform.translation.x == b.transform.translation.x &&
+           a.transform.translation.y == b.transform.translation.y &&
+           a.transform.translation.z == b.transform.translation.z;
+  };
+  if (transforms.size() == static_sent_.size() &&
+      std::equal(transforms.begin(), transforms.end(), static_sent_.begin(), same))
+    return;  // nothing new (nothing static, now or before, included)
+  if (!static_publisher_) return;  // shutting down
+  tf2_msgs::TFMessage message;
+  message.transforms = transforms;
+  static_publisher_.publish(message);
+  static_sent_ = std::move(transforms);
+}
+
+void SpinningTopNode::update_hardware_id() {
+  // The updater's own (its "starting up" statuses); each top's status carries its own scene.
+  diagnostics_->setHardwareID("spinning_top/" +
+                              std::string(tops_.empty() ? "none" : to_string(tops_.front()->simulator().config().scene)));
 }
 
 void SpinningTopNode::restart_timer() {
@@ -278,6 +504,11 @@ void SpinningTopNode::on_timer(const ros::WallTimerEvent&) {
     now = end;
     if (!finished) break;
     ++ticks_in_window_;
+    // A service call, a parameter update or the diagnostics waiting: served now, between two
+    // ticks, rather than after the whole budget (the timer, late, fires again at once). With
+    // many tops a node behind the wall clock answers ~spawn within one tick, however long the
+    // budget (a spawn waited for it: 8 ms with 1 top, 61 ms with 300).
+    if (!ros::getGlobalCallbackQueue()->isEmpty()) break;
   }
   if (paced) last_lag_ = clock_.lag(now.toSec());
 }
@@ -326,7 +557,11 @@ void SpinningTopNode::publish(const ros::Time& stamp) {
   if (tick % ticks_per_tf_ == 0) {
     std::vector<geometry_msgs::TransformStamped> transforms;
     for (const auto& top : tops_) top->append_transforms(stamp, transforms);
-    if (!transforms.empty()) tf_broadcaster_->sendTransform(transforms);  // none once every top is killed
+    if (!transforms.empty() && tf_publisher_) {  // none once every top is killed
+      tf2_msgs::TFMessage message;
+      message.transforms = std::move(transforms);
+      tf_publisher_.publish(message);
+    }
   }
   const bool markers = tick % ticks_per_marker_ == 0;
   for (const auto& top : tops_) top->publish(stamp, markers);
@@ -335,7 +570,7 @@ void SpinningTopNode::publish(const ros::Time& stamp) {
 void SpinningTopNode::report(const std::string& status) {
   std_msgs::String message;
   message.data = status;
-  status_publisher_.publish(message);
+  if (status_publisher_) status_publisher_.publish(message);
 }
 
 void SpinningTopNode::on_diagnostics_timer(const ros::WallTimerEvent&) { diagnostics_->force_update(); }
@@ -408,51 +643,94 @@ void SpinningTopNode::reconfigure(SpinningTopConfig& config, uint32_t /*level*/)
     return refuse(error.what());
   }
   const SpinningTopConfig& old = applied_config_;
-  const std::uint32_t changed = changed_levels(config, old);
-  const bool step_changed = (changed & (kModel | kIntegrator)) != 0;
-  const bool body_changed = (changed & kBody) != 0;
-  // Only what changed applies, to every top (tops spawned with another body keep theirs).
-  if (step_changed || body_changed) {
-    // Every top is checked before any changes, so that a refusal leaves all of them as they were.
-    for (const auto& top : tops_) {
+  // A key applies to the tops that run with it (friction: the viscous ones) and leaves the others
+  // alone; one that applies to no top is refused, since nothing would take it.
+  for (const LiveKey& key : live_keys()) {
+    if (key.in_top == nullptr || config.*key.field == old.*key.field) continue;
+    const bool applies =
+        tops_.empty() || std::any_of(tops_.begin(), tops_.end(), [&](const auto& top) {
+          return applies_to(key, top->simulator().config());
+        });
+    if (!applies)
+      return refuse(std::string(key.name) + ": applies to " + applies_only_to(key) + " only, and no top runs it");
+  }
+  // Each top's change: the keys that changed and apply to it, checked for every top before any
+  // changes, so that a refusal leaves all of them as they were. A body change (m, A, C, h, spin) is
+  // prepared whole here (its new model from the current state); the others are the core's update.
+  struct Change {
+    TopInstance* top;
+    std::vector<std::string> keys;  // the changed live keys that apply to it
+    SceneConfig config;             // its current configuration with them
+    bool body;
+    TopInstance::BodyChange body_change;
+  };
+  std::vector<Change> changes;
+  for (const auto& top : tops_) {
+    Change change{top.get(), changes_for(top->simulator().config(), config, old), {}, false, {}};
+    if (change.keys.empty()) continue;
+    // A body change names its body key first (the others come along with it).
+    const auto body_key = std::find_if(change.keys.begin(), change.keys.end(), [](const std::string& k) {
+      for (const LiveKey& key : live_keys())
+        if (k == key.name) return key.level == kBody;
+      return false;
+    });
+    change.body = body_key != change.keys.end();
+    if (change.body) std::rotate(change.keys.begin(), body_key, body_key + 1);
+    try {
       // Its start with its current body and integrator, and the changes (the spin's included).
       SceneConfig candidate = top->start_config();
       candidate.top = top->simulator().config().top;
       candidate.integrator = top->simulator().config().integrator;
-      candidate = with_changes(candidate, config, old);
-      try {
-        validate(candidate);
-        if (body_changed && top->event() != Event::kNone)
-          throw InvalidParameter(config.spin != old.spin ? "spin" : "mass",
-                                 std::string("top '") + top->name() + "' stopped at its " + to_string(top->event()) +
-                                     " event: reset it before changing its body");
-        top->require_on_the_floor(first_changed_key(config, old));
-      } catch (const InvalidParameter& error) {
-        return refuse(std::string(error.what()) + (top->name().empty() ? "" : " (top " + top->name() + ")"));
+      candidate = with_applicable_changes(candidate, config, old);
+      validate(candidate);
+      if (change.body && top->event() != Event::kNone)
+        throw InvalidParameter(config.spin != old.spin ? "spin" : change.keys.front(),
+                               std::string("the top stopped at its ") + to_string(top->event()) +
+                                   " event: reset it before changing its body");
+      top->require_on_the_floor(change.keys.front());
+      change.config = with_applicable_changes(top->simulator().config(), config, old);
+      if (change.body) {
+        const double spin = config.spin != old.spin ? config.spin : top->snapshot().body_rates.z();
+        change.body_change = top->prepare_body(change.config.top, change.config.integrator, spin, change.keys.front());
       }
+    } catch (const InvalidParameter& error) {
+      return refuse(std::string(blame(error, change.keys).what()) +
+                    (top->name().empty() ? "" : " (top " + top->name() + ")"));
     }
-    for (const auto& top : tops_) {
-      try {
-        const SceneConfig changed_config = with_changes(top->simulator().config(), config, old);
-        const TopParameters& new_top = changed_config.top;
-        const IntegratorSettings& new_integrator = changed_config.integrator;
-        if (body_changed) {
-          const double spin = config.spin != old.spin ? config.spin : top->snapshot().body_rates.z();
-          top->update(top->simulator().config().top, new_integrator);
-          top->change_body(new_top, spin);
-        } else if (top->update(new_top, new_integrator)) {
-          // auto chose again for the current state (exact may refuse it now, or accept it again).
-          ROS_WARN("spinning_top: the update switched the integrator of %s at t = %.9g s: now %s",
-                   top->name().empty() ? "the top" : top->name().c_str(), top->time(),
-                   top->simulator().integrator_description().c_str());
-        }
-      } catch (const InvalidParameter& error) {
-        // The state itself refused the new body (checked per top above only for the start).
-        return refuse(std::string(error.what()) + (top->name().empty() ? "" : " (top " + top->name() + ")"));
-      }
-    }
-    send_static_transforms();
+    changes.push_back(std::move(change));
   }
+  // Applied: a prepared body cannot fail; the core's update() checks the state itself, and if it
+  // refuses one top, those already updated go back to what they had.
+  std::vector<std::pair<TopInstance*, SceneConfig>> updated;  // each with its configuration before
+  for (Change& change : changes) {
+    TopInstance* top = change.top;
+    if (change.body) {
+      top->change_body(std::move(change.body_change));
+      continue;
+    }
+    const SceneConfig before = top->simulator().config();
+    try {
+      if (top->update(change.config.top, change.config.integrator)) {
+        // auto chose again for the current state (exact may refuse it now, or accept it again).
+        ROS_WARN("spinning_top: the update switched the integrator of %s at t = %.9g s: now %s",
+                 top->name().empty() ? "the top" : top->name().c_str(), top->time(),
+                 top->simulator().integrator_description().c_str());
+      }
+      updated.emplace_back(top, before);
+    } catch (const InvalidParameter& error) {
+      for (auto back = updated.rbegin(); back != updated.rend(); ++back) {
+        try {
+          back->first->update(back->second.top, back->second.integrator);
+        } catch (const InvalidParameter&) {
+          ROS_ERROR("spinning_top: %s could not go back to its previous model after a refused change",
+                    back->first->name().empty() ? "the top" : back->first->name().c_str());
+        }
+      }
+      return refuse(std::string(blame(error, change.keys).what()) +
+                    (top->name().empty() ? "" : " (top " + top->name() + ")"));
+    }
+  }
+  if (!changes.empty()) send_static_transforms();
   bool pacing_changed = false;
   for (const LiveKey& key : live_keys()) {
     if (key.in_node == nullptr || *key.in_node(settings_) == config.*key.field) continue;
@@ -501,12 +779,14 @@ bool SpinningTopNode::on_reload(std_srvs::Trigger::Request&, std_srvs::Trigger::
   // any top changes; tops spawned by ~spawn are reset.
   std::vector<std::pair<std::string, SceneConfig>> configs;
   std::vector<Eigen::Vector2d> positions;
+  NodeKeys node_keys;
   try {
-    configs = read_tops();
+    const ParameterTree tree = ParameterTree::fetch(private_nh_.getNamespace());
+    configs = read_tops(tree, node_keys);
     for (const auto& [name, config] : configs) {
       if (find_top(name) == nullptr)
         throw InvalidParameter("tops", "'" + name + "' is not running: ~tops is read at start only");
-      positions.push_back(read_tip_position(name));
+      positions.push_back(read_tip_position(tree, name));
       try {
         make_simulator(config);  // what restart() will build: it must not refuse half-way
       } catch (const InvalidParameter& error) {
@@ -527,7 +807,9 @@ bool SpinningTopNode::on_reload(std_srvs::Trigger::Request&, std_srvs::Trigger::
       top->restart(it->second, positions[it - configs.begin()], clock_.time());
   }
   tick_unfinished_ = false;
+  write_back(node_keys);
   send_static_transforms();
+  update_hardware_id();
   response.success = true;
   response.message = "parameters read again; every top restarted at simulated time 0";
   report("applied: " + response.message);
@@ -574,19 +856,38 @@ bool SpinningTopNode::on_spawn(Spawn::Request& request, Spawn::Response& respons
     if (find_top(request.name) != nullptr) throw InvalidParameter("name", "a top named '" + request.name + "' exists");
     ParameterMap keys;
     if (request.scene_file.empty()) {
-      keys = read_scene_parameters(private_nh_);  // the node's own keys
+      // The node's own keys (those of its files and ~<key>): its namespace's scene members only,
+      // not every top's URDF beside them.
+      keys = read_node_keys(ParameterTree::fetch_members(private_nh_.getNamespace(), node_key_members())).keys;
     } else {
+      if (request.scene_file.size() > kMaxPathLength)
+        throw InvalidParameter("scene_file", "'" + excerpt(request.scene_file) + "' is longer than " +
+                                                 std::to_string(kMaxPathLength) + " characters");
       try {
         keys = read_scene_file(request.scene_file);
       } catch (const SceneFileError& error) {
         throw InvalidParameter("scene_file", error.what());
       }
     }
+    if (request.keys.size() > kMaxSpawnKeys)
+      throw InvalidParameter("keys", std::to_string(request.keys.size()) + " assignments; at most " +
+                                         std::to_string(kMaxSpawnKeys));
+    const std::vector<std::string> known = parameter_keys();
     for (const std::string& assignment : request.keys) {
       const std::size_t equals = assignment.find('=');
       if (equals == std::string::npos || equals == 0)
-        throw InvalidParameter("keys", "'" + assignment + "' is not key=value (e.g. initial/spin=80)");
-      keys[assignment.substr(0, equals)] = assignment.substr(equals + 1);
+        throw InvalidParameter("keys", "'" + excerpt(assignment) + "' is not key=value (e.g. initial/spin=80)");
+      const std::string key = assignment.substr(0, equals);
+      if (std::find(known.begin(), known.end(), key) == known.end()) {
+        const std::string nearest = nearest_name(key, known);
+        throw InvalidParameter("keys", "'" + excerpt(key) + "' is not a scene key" +
+                                           (nearest.empty() ? "" : " (did you mean " + nearest + "?)") +
+                                           "; `simulate --help` lists them");
+      }
+      if (assignment.size() - equals - 1 > kMaxValueLength)
+        throw InvalidParameter(key, "the value '" + excerpt(assignment.substr(equals + 1)) + "' is longer than " +
+                                        std::to_string(kMaxValueLength) + " characters");
+      keys[key] = assignment.substr(equals + 1);
     }
     const SceneConfig config = parse_scene_config(keys, /*require_all=*/false);
     add_top(std::make_unique<TopInstance>(request.name, config, Eigen::Vector2d(request.x, request.y), settings_,
@@ -596,6 +897,7 @@ bool SpinningTopNode::on_spawn(Spawn::Request& request, Spawn::Response& respons
     ROS_WARN("spinning_top: %s", response.message.c_str());
     return true;
   }
+  send_static_transforms();
   const TopInstance& top = *tops_.back();
   response.success = true;
   response.message = "top " + top.name() + ": scene " + to_string(top.simulator().config().scene) + ", " +
@@ -609,8 +911,8 @@ bool SpinningTopNode::on_kill(Kill::Request& request, Kill::Response& response) 
   const auto it = std::find_if(tops_.begin(), tops_.end(), [&](const auto& top) { return top->name() == request.name; });
   if (request.name.empty() || it == tops_.end()) {
     response.success = false;
-    response.message = request.name.empty() ? "kill: give the name of a spawned top"
-                                            : "kill: no top named '" + request.name + "'";
+    response.message = request.name.empty() ? "kill: name: give the name of a spawned top"
+                                            : "kill: name: no top named '" + excerpt(request.name) + "'";
     return true;
   }
   diagnostics_->removeByName(request.name);
@@ -618,8 +920,10 @@ bool SpinningTopNode::on_kill(Kill::Request& request, Kill::Response& response) 
   top_reset_services_.erase(std::remove_if(top_reset_services_.begin(), top_reset_services_.end(),
                                            [&](const ros::ServiceServer& s) { return s.getService() == service; }),
                             top_reset_services_.end());
+  private_nh_.deleteParam(request.name + "/robot_description");  // a killed top's URDF goes with it
   tops_.erase(it);
   send_static_transforms();
+  update_hardware_id();
   response.success = true;
   response.message = "killed " + request.name;
   ROS_INFO("spinning_top: %s", response.message.c_str());
@@ -630,7 +934,7 @@ bool SpinningTopNode::on_set_state(SetState::Request& request, SetState::Respons
   TopInstance* top = find_top(request.name);
   response.success = false;
   if (top == nullptr) {
-    response.message = "set_state: no top named '" + request.name + "'";
+    response.message = "set_state refused, nothing changed: name: no top named '" + excerpt(request.name) + "'";
     return true;
   }
   SceneConfig config = top->start_config();

@@ -79,11 +79,20 @@ TopInstance::TopInstance(std::string name, const SceneConfig& config, const Eige
       stamp_of_(std::move(stamp_of)),
       nh_(name_.empty() ? private_nh : ros::NodeHandle(private_nh, name_)) {
   restart(config, tip_xy, world_time);  // validates before anything is advertised
-  contact_point_publisher_ = nh_.advertise<geometry_msgs::PointStamped>("contact_point", 100);
-  normal_force_publisher_ = nh_.advertise<geometry_msgs::WrenchStamped>("normal_force", 100);
-  twist_publisher_ = nh_.advertise<geometry_msgs::TwistStamped>("twist", 100);
-  state_publisher_ = nh_.advertise<spinning_top::TopState>("state", 100);
-  marker_publisher_ = nh_.advertise<visualization_msgs::MarkerArray>("markers", 10);
+  // Each per-tick topic with its count of subscribers (Listeners): the callbacks hold the counts,
+  // not the top, so a callback queued before a ~kill finds them still there.
+  const auto counted = [this](const std::string& topic, uint32_t queue, std::atomic<int> Listeners::*count,
+                              auto message) {
+    const std::shared_ptr<Listeners> listeners = listeners_;
+    return nh_.advertise<decltype(message)>(
+        topic, queue, [listeners, count](const ros::SingleSubscriberPublisher&) { ++((*listeners).*count); },
+        [listeners, count](const ros::SingleSubscriberPublisher&) { --((*listeners).*count); });
+  };
+  contact_point_publisher_ = counted("contact_point", 100, &Listeners::contact_point, geometry_msgs::PointStamped());
+  normal_force_publisher_ = counted("normal_force", 100, &Listeners::normal_force, geometry_msgs::WrenchStamped());
+  twist_publisher_ = counted("twist", 100, &Listeners::twist, geometry_msgs::TwistStamped());
+  state_publisher_ = counted("state", 100, &Listeners::state, spinning_top::TopState());
+  marker_publisher_ = counted("markers", 10, &Listeners::markers, visualization_msgs::MarkerArray());
   // Several events can come within one tick (a landing and the lift-off at the same instant):
   // a queue, so that a subscriber gets each; latched, a late one gets the last.
   event_publisher_ = nh_.advertise<std_msgs::String>("event", 100, /*latch=*/true);
@@ -91,13 +100,18 @@ TopInstance::TopInstance(std::string name, const SceneConfig& config, const Eige
   nh_.setParam("robot_description", top_urdf(start_config_.top, body_frame_));
 }
 
-TopInstance::~TopInstance() {
-  if (!name_.empty()) nh_.deleteParam("robot_description");  // a killed top's; the node's own stays
-}
+// A killed top's URDF is deleted by ~kill; at shutdown the parameters stay (as every node's do;
+// the launch file clears the namespace at the next start), which spares a call to the master per
+// top while the node exits.
+TopInstance::~TopInstance() = default;
 
 void TopInstance::start(const SceneConfig& config, double time_base, double world_time) {
-  std::unique_ptr<Simulator> simulator = make_simulator(config);  // validates; throws InvalidParameter
+  start(make_simulator(config), time_base, world_time);  // validates; throws InvalidParameter
+}
+
+void TopInstance::start(std::unique_ptr<Simulator> simulator, double time_base, double world_time) {
   simulator_ = std::move(simulator);
+  start_event_reported_ = false;
   time_base_ = time_base;
   origin_ = world_time;
   now_ = simulator_->snapshot();
@@ -110,8 +124,9 @@ void TopInstance::place_tip_at(const Eigen::Vector2d& tip_xy) {
 }
 
 void TopInstance::restart(const SceneConfig& config, const Eigen::Vector2d& tip_xy, double world_time) {
-  if (!tip_xy.allFinite() || tip_xy.norm() > 1e6)
-    throw InvalidParameter("x", "the tip's position must be finite and within 1e6 m of the origin");
+  for (int i = 0; i < 2; ++i)
+    if (!(std::abs(tip_xy[i]) <= 1e6))
+      throw InvalidParameter(i == 0 ? "x" : "y", "the tip's position must be finite and within 1e6 m of the origin");
   const bool had_event = simulator_ && simulator_->event() != Event::kNone;
   start(config, 0.0, world_time);
   start_config_ = config;
@@ -144,16 +159,18 @@ void TopInstance::require_on_the_floor(const std::string& key) const {
                                     "); try again when it has landed");
 }
 
-void TopInstance::change_body(const TopParameters& top, double spin) {
+TopInstance::BodyChange TopInstance::prepare_body(const TopParameters& top, const IntegratorSettings& integrator,
+                                                  double spin, const std::string& key) const {
   if (simulator_->event() != Event::kNone)
-    throw InvalidParameter("mass", std::string("the top stopped at its ") + to_string(simulator_->event()) +
-                                       " event: reset it before changing its body");
+    throw InvalidParameter(key, std::string("the top stopped at its ") + to_string(simulator_->event()) +
+                                    " event: reset it before changing its body");
   // A new contact model from a flying state would put the top back on the floor.
-  require_on_the_floor("mass");
+  require_on_the_floor(key);
   const Snapshot now = now_;
   const EulerState e = euler_state(now.attitude, now.body_rates);
   SceneConfig config = simulator_->config();
   config.top = top;
+  config.integrator = integrator;
   config.initial = InitialConditions{};
   config.initial.heading = e.heading;
   config.initial.tilt = e.tilt;
@@ -165,21 +182,44 @@ void TopInstance::change_body(const TopParameters& top, double spin) {
     config.initial.velocity_x = now.outputs.center_of_mass_velocity.x();
     config.initial.velocity_y = now.outputs.center_of_mass_velocity.y();
   }
-  SceneConfig new_start = start_config_;
-  new_start.top = top;
-  new_start.initial.spin = spin;
-  validate(new_start);  // ~reset must still work with the new body
-  const Eigen::Vector2d tip = world(now.outputs.contact_point).head<2>();
+  BodyChange change;
+  change.start = start_config_;
+  change.start.top = top;
+  change.start.integrator = integrator;
+  change.start.initial.spin = spin;
+  validate(change.start);  // ~reset must still work with the new body
+  change.tip = world(now.outputs.contact_point).head<2>();
   // The new model starts where the old one is: at the world time of its state (an unfinished
   // tick has not reached the world's time yet).
-  start(config, time_base_ + simulator_->time(), origin_ + simulator_->time());  // validates the state
-  start_config_ = new_start;
-  nh_.setParam("robot_description", top_urdf(top, body_frame_));
-  place_tip_at(tip);  // the tip stays where it is: the new model's origin moves under it
+  change.simulator = make_simulator(config);  // validates the state
+  if (change.simulator->event() != Event::kNone)
+    throw InvalidParameter(key, std::string("with the new body the run would end at once at the current state (") +
+                                    to_string(change.simulator->event()) + "): refused, the run goes on");
+  change.top = top;
+  change.time_base = time_base_ + simulator_->time();
+  change.origin = origin_ + simulator_->time();
+  return change;
+}
+
+void TopInstance::change_body(BodyChange change) {
+  start(std::move(change.simulator), change.time_base, change.origin);
+  start_config_ = change.start;
+  nh_.setParam("robot_description", top_urdf(change.top, body_frame_));
+  place_tip_at(change.tip);  // the tip stays where it is: the new model's origin moves under it
 }
 
 bool TopInstance::advance(double world_time, const WorkBudget& budget) {
-  if (simulator_->event() != Event::kNone) return true;  // stopped: the final pose goes on being published
+  if (simulator_->event() != Event::kNone) {
+    // A run the core ended where it started (R < 0 at the release with after_lift_off: stop):
+    // reported as any other event, once (the transitions of its start first, in time order).
+    if (!start_event_reported_) {
+      start_event_reported_ = true;
+      for (const Transition& transition : simulator_->take_transitions())
+        publish_event(to_string(transition.event), transition.state, false);
+      handle_event(simulator_->event());
+    }
+    return true;  // stopped: the final pose goes on being published
+  }
   const double target = world_time - origin_;
   const Event event = simulator_->advance_to(target, budget);
   // The transitions passed, also by a call that ran out of budget (the next one goes on after them).
@@ -191,7 +231,10 @@ bool TopInstance::advance(double world_time, const WorkBudget& budget) {
   }
   if (event == Event::kNone && simulator_->time() < target) return false;  // out of budget
   now_ = simulator_->snapshot();
-  if (event != Event::kNone) handle_event(event);
+  if (event != Event::kNone) {
+    start_event_reported_ = true;
+    handle_event(event);
+  }
   return true;
 }
 
@@ -255,10 +298,16 @@ geometry_msgs::TransformStamped TopInstance::contact_transform(const ros::Time& 
 }
 
 bool TopInstance::publish(const ros::Time& stamp, bool with_markers) {
-  const Snapshot s = shown();
+  Snapshot s = shown();
   if (!finite(s)) {  // the core promises this never happens; never pass it on
     ROS_ERROR_ONCE("spinning_top: non-finite state at t = %.9g s not published", s.time);
     return false;
+  }
+  if (s.outputs.normal_force < 0.0) {  // the core promises R >= 0; the floor cannot pull the tip
+    ROS_ERROR_ONCE("spinning_top: R = %.6g N < 0 at t = %.9g s published as 0 (the floor cannot pull)",
+                   s.outputs.normal_force, s.time);
+    s.outputs.normal_force = 0.0;
+    s.outputs.contact_force.setZero();
   }
   const ModelOutputs& out = s.outputs;
   const Vector3 contact = world(out.contact_point);
@@ -268,13 +317,13 @@ bool TopInstance::publish(const ros::Time& stamp, bool with_markers) {
   point.header.stamp = stamp;
   point.header.frame_id = settings_.world_frame;
   point.point = to_point(contact);
-  contact_point_publisher_.publish(point);
+  if (listeners_->contact_point > 0) contact_point_publisher_.publish(point);
 
   geometry_msgs::WrenchStamped wrench;
   wrench.header.stamp = stamp;
   wrench.header.frame_id = contact_frame_;
   wrench.wrench.force = to_vector(force);  // pivot reaction or friction; 0 when frictionless; all 0 in flight
-  normal_force_publisher_.publish(wrench);  // torque about the tip: 0 (a point contact)
+  if (listeners_->normal_force > 0) normal_force_publisher_.publish(wrench);  // torque about the tip: 0 (a point contact)
 
   // The body's twist in the world frame: omega = q omega_body, and G's velocity.
   const Vector3 omega = s.attitude * s.body_rates;
@@ -282,9 +331,9 @@ bool TopInstance::publish(const ros::Time& stamp, bool with_markers) {
   twist.header = point.header;
   twist.twist.linear = to_vector(out.center_of_mass_velocity);
   twist.twist.angular = to_vector(omega);
-  twist_publisher_.publish(twist);
+  if (listeners_->twist > 0) twist_publisher_.publish(twist);
 
-  if (state_publisher_.getNumSubscribers() > 0) {
+  if (listeners_->state > 0) {
     const EulerState e = euler_state(s.attitude, s.body_rates);
     // The monitors judge the integration: those of the core's state (also after the end).
     const Monitors m = monitors(now_, simulator_->config(), energy_baseline_, pivot_);
@@ -319,7 +368,7 @@ bool TopInstance::publish(const ros::Time& stamp, bool with_markers) {
     trace_.push_back(contact);
     while (static_cast<int>(trace_.size()) > settings_.trace_length) trace_.pop_front();
   }
-  if (with_markers)
+  if (with_markers && listeners_->markers > 0)
     marker_publisher_.publish(top_markers(simulator_->config().top, contact, force, trace_,
                                           {settings_.world_frame, body_frame_}, settings_.force_scale, stamp));
   return true;
@@ -345,6 +394,7 @@ void TopInstance::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) 
     status.mergeSummaryf(DiagnosticStatus::ERROR, "event %s at t = %.9g s", to_string(stopped), time());
 
   if (!name_.empty()) status.add("top", name_);
+  status.hardware_id = std::string("spinning_top/") + to_string(simulator_->config().scene);
   status.add("scene", to_string(simulator_->config().scene));
   // What runs and why (auto: its choice, and exact's refusal where it fell back).
   const IntegratorChoice choice = simulator_->integrator_choice();
@@ -360,7 +410,7 @@ void TopInstance::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) 
   status.addf("energy balance (E + W - E0) / |E0|", "%.3g", m.energy_balance);
   status.addf("quaternion norm error", "%.3g", m.quaternion_norm_error);
   status.addf("constraint residual [m]", "%.3g", m.constraint_residual);
-  status.addf("normal force [N]", "%.9g", out.normal_force);
+  status.addf("normal force [N]", "%.9g", std::max(0.0, shown().outputs.normal_force));
   const HopSummary hops = simulator_->hops();
   status.add("phase", to_string(s.phase));
   status.addf("tip height [m]", "%.9g", out.contact_point.z());

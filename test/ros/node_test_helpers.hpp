@@ -88,6 +88,11 @@ inline double reconfigure(const std::string& node, const std::string& name, doub
   return NAN;
 }
 
+/// A message as a failure may print it: at most 300 characters.
+inline std::string shown(const std::string& message) {
+  return message.size() <= 300 ? message : message.substr(0, 300) + "... (" + std::to_string(message.size()) + " characters)";
+}
+
 inline bool finite(const geometry_msgs::WrenchStamped& w) {
   return std::isfinite(w.wrench.force.x) && std::isfinite(w.wrench.force.y) && std::isfinite(w.wrench.force.z);
 }

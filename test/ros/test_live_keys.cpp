@@ -58,6 +58,27 @@ TEST(LiveKeys, AChangeOfEachKeyReachesWhereItIsKeptAndOnlyThere) {
   EXPECT_EQ(changed_levels(old, old), 0u);
 }
 
+// Issue 19: friction acts on viscous tops only; a change of it leaves another top as it was, and
+// every other key reaches every scene.
+TEST(LiveKeys, AKeyReachesOnlyTheTopsItAppliesTo) {
+  const SpinningTopConfig old = SpinningTopConfig::__getDefault__();
+  for (const SceneType scene : {SceneType::kFixedTip, SceneType::kFrictionless, SceneType::kViscous}) {
+    SceneConfig start;
+    start.scene = scene;
+    for (const LiveKey& key : live_keys()) {
+      if (key.in_top == nullptr) continue;
+      SpinningTopConfig config = old;
+      config.*key.field += 0.5;
+      const bool applies = applies_to(key, start);
+      EXPECT_EQ(applies, std::string(key.name) != "friction" || scene == SceneType::kViscous) << key.name;
+      EXPECT_EQ(applies, applies_only_to(key)[0] == '\0' || scene == SceneType::kViscous) << key.name;
+      const SceneConfig changed = with_applicable_changes(start, config, old);
+      EXPECT_EQ(*key.in_top(const_cast<SceneConfig&>(changed)), applies ? config.*key.field : *key.in_top(start))
+          << key.name << " in " << to_string(scene);
+    }
+  }
+}
+
 }  // namespace
 }  // namespace ros_front_end
 }  // namespace spinning_top

@@ -4,15 +4,19 @@
 #include <geometry_msgs/PointStamped.h>
 #include <gtest/gtest.h>
 #include <ros/ros.h>
+#include <stdlib.h>
+#include <unistd.h>
+
+#include <fstream>
+#include <sstream>
 #include <string>
 
 #include "node_test_helpers.hpp"
 
+using node_test::Outcome;
 using node_test::Recorder;
 
 namespace {
-
-using node_test::Outcome;
 
 /// Runs the node as `name` with the given private-parameter arguments, for at most
 /// `seconds` (then `timeout` ends it with exit code 124).
@@ -85,6 +89,90 @@ TEST(NodeBadParameter, HugeRealTimeFactor) {
 }
 // The work budget of one callback must leave the node responsive.
 TEST(NodeBadParameter, TickBudgetOutsideItsRange) { expect_refused("bad_budget", "_tick_budget:=5.0", "tick_budget"); }
+
+// Issue 19, one file, two physics: the node reads a scene file itself (~scene_file, as the launch
+// file gives it), with the reader `simulate --config` uses, instead of getting it through
+// `rosparam load` (YAML 1.1, where `gravity: 010` is 8 while simulate's YAML 1.2 reads 10).
+namespace {
+
+/// A scene file in /tmp: a sleeping top (upright, spinning: R = m g at t = 0) with `extra` lines.
+std::string scene_file(const std::string& extra) {
+  char path[] = "/tmp/spinning_top_scene_XXXXXX.yaml";
+  const int fd = mkstemps(path, 5);
+  EXPECT_GE(fd, 0);
+  close(fd);
+  std::ofstream(path) << "scene: fixed_tip\nmass: 0.1\ninertia_transverse: 4.0e-5\ninertia_axial: 6.0e-5\n"
+                         "tip_distance: 0.02\ninitial:\n  tilt: 0.0\n  spin: 150.0\n"
+                      << extra;
+  return path;
+}
+
+/// simulate's floor force at t = 0 for a scene file (NAN if it refuses the file).
+double simulated_weight(const std::string& file) {
+  const Outcome outcome = node_test::run_command(SIMULATE_EXECUTABLE " --config " + file + " --duration 0.01");
+  if (outcome.exit_code != 0) return NAN;
+  std::istringstream lines(outcome.output);
+  std::string line;
+  while (std::getline(lines, line))
+    if (line.rfind("0,", 0) == 0) {  // the row at t = 0; normal_force is the 12th column
+      std::istringstream cells(line);
+      std::string cell;
+      for (int i = 0; i < 12; ++i) std::getline(cells, cell, ',');
+      return std::stod(cell);
+    }
+  return NAN;
+}
+
+}  // namespace
+
+TEST(NodeBadParameter, SceneFileThatCannotBeRead) {
+  expect_refused("bad_scene_file", "_scene_file:=/nonexistent/scene.yaml", "scene_file");
+}
+
+// The same file in both: the node's gravity is simulate's (R / m at the sleeping start), or both
+// refuse the file naming gravity (a reader that refuses the forms YAML 1.1 and 1.2 read apart).
+TEST(NodeBadParameter, TheNodeReadsASceneFileAsSimulateDoes) {
+  const std::string file = scene_file("gravity: 010\n");
+  const double weight = simulated_weight(file);
+  ros::param::del("/same_file");
+  const Outcome outcome = run_node("same_file", "_scene_file:=" + file + " _rate:=100 _publish_clock:=false "
+                                   "_body_frame:=same_file_top _contact_frame:=same_file_contact", 2);
+  if (std::isnan(weight)) {
+    EXPECT_NE(outcome.exit_code, 0);
+    EXPECT_NE(outcome.exit_code, 124) << "simulate refuses the file; the node ran with it:\n" << outcome.output;
+    EXPECT_NE(outcome.output.find("gravity"), std::string::npos) << outcome.output;
+  } else {
+    EXPECT_EQ(outcome.exit_code, 124) << outcome.output;
+    double gravity = 0.0;
+    EXPECT_TRUE(ros::param::get("/same_file/gravity", gravity)) << "the node writes the values in force back";
+    EXPECT_NEAR(gravity, weight / 0.1, 1e-12) << "simulate reads the file's gravity as " << weight / 0.1;
+  }
+  unlink(file.c_str());
+  ros::param::del("/same_file");
+}
+
+// The node writes the files' values back to ~<key>; a later start with another file (the
+// namespace not cleared, as with rosrun) takes the new file's values, not its own write-back,
+// while a private parameter given explicitly still overrides the file.
+TEST(NodeBadParameter, ASceneFileWinsOverTheNodesOwnWriteBackAndExplicitKeysOverrideIt) {
+  const std::string first = scene_file("gravity: 5.0\n"), second = scene_file("gravity: 7.0\n");
+  const std::string common = " _rate:=100 _publish_clock:=false _body_frame:=rewritten_top _contact_frame:=rewritten_contact";
+  ros::param::del("/rewritten");
+  EXPECT_EQ(run_node("rewritten", "_scene_file:=" + first + common, 2).exit_code, 124);
+  double gravity = 0.0, spin = 0.0;
+  EXPECT_TRUE(ros::param::get("/rewritten/gravity", gravity));
+  EXPECT_EQ(gravity, 5.0);
+  EXPECT_EQ(run_node("rewritten", "_scene_file:=" + second + " _initial/spin:=90.0" + common, 2).exit_code, 124);
+  EXPECT_TRUE(ros::param::get("/rewritten/gravity", gravity));
+  EXPECT_EQ(gravity, 7.0) << "the first run's write-back overrode the second file";
+  EXPECT_TRUE(ros::param::get("/rewritten/initial/spin", spin));
+  EXPECT_EQ(spin, 90.0) << "an explicit private parameter overrides the file";
+  EXPECT_TRUE(ros::param::get("/rewritten/scene_file_values/initial/spin", spin));
+  EXPECT_EQ(spin, 150.0) << "what the file gives";
+  unlink(first.c_str());
+  unlink(second.c_str());
+  ros::param::del("/rewritten");
+}
 
 // The control: the same binary with valid parameters runs (and publishes) until stopped.
 TEST(NodeBadParameter, ValidParametersKeepTheNodeRunning) {

@@ -6,12 +6,14 @@
 #include <geometry_msgs/WrenchStamped.h>
 #include <gtest/gtest.h>
 #include <ros/ros.h>
+#include <rosgraph_msgs/Log.h>
 #include <std_msgs/String.h>
 
 #include <cmath>
 #include <string>
 
 #include "node_test_helpers.hpp"
+#include "spinning_top/TopEvent.h"
 
 using node_test::finite;
 using node_test::Recorder;
@@ -74,6 +76,68 @@ TEST(NodeEvent, FallingTopEndsWithTheEventAndNoNaN) {
   const auto after_reset = events.messages();
   EXPECT_EQ(after_reset[0].data, "");
   EXPECT_EQ(after_reset[1].data, event);
+}
+
+// Issue 19: R < 0 at the release with after_lift_off: stop. The run ends at t = 0 with lift_off,
+// reported as any event: a log line (ROS_ERROR, on /rosout), ~event and ~event_stamped (latched,
+// terminal, time 0), diagnostics ERROR; ~normal_force, ~state and diagnostics never show the
+// negative R of that state (the core's R there is -0.447 N); ~reset reports it again.
+TEST(NodeEvent, ALiftOffAtTheReleaseIsReportedAndNoNegativeForceIsPublished) {
+  ros::NodeHandle nh;
+  Recorder<std_msgs::String> events(nh, "/released/event");
+  Recorder<spinning_top::TopEvent> stamped(nh, "/released/event_stamped");
+  Recorder<geometry_msgs::WrenchStamped> forces(nh, "/released/normal_force", 100000);
+  Recorder<diagnostic_msgs::DiagnosticArray> diagnostics(nh, "/diagnostics");
+  Recorder<rosgraph_msgs::Log> log(nh, "/rosout", 10000);  // every node publishes its log there
+  // Started paused: nothing happens before the test listens (the log line is not latched).
+  ASSERT_TRUE(wait_for([&] { return log.publishers() > 0 && events.publishers() > 0 && forces.publishers() > 0; }, 20.0));
+  ros::WallDuration(0.5).sleep();  // the connections' handshakes
+  EXPECT_EQ(events.size(), 0u) << "an event before the first tick";
+  EXPECT_TRUE(trigger("/released/resume").success);
+  ASSERT_TRUE(wait_for([&] { return events.size() >= 1 && stamped.size() >= 1; }, 20.0)) << "no event at the release";
+  EXPECT_EQ(events.messages().back().data, "lift_off");
+  const spinning_top::TopEvent e = stamped.messages().back();
+  EXPECT_EQ(e.event, "lift_off");
+  EXPECT_TRUE(e.terminal);
+  EXPECT_EQ(e.time, 0.0);
+  EXPECT_EQ(e.contact_point.z, 0.0);
+  ASSERT_TRUE(wait_for([&] { return forces.size() >= 50; }, 10.0));
+  for (const auto& w : forces.messages()) {
+    EXPECT_GE(w.wrench.force.z, 0.0) << "a negative R published at " << w.header.stamp;
+    EXPECT_EQ(w.wrench.force.z, 0.0) << "the run has ended: at rest";
+  }
+  std::string force_in_diagnostics;
+  ASSERT_TRUE(wait_for(
+      [&] {
+        for (const auto& array : diagnostics.messages())
+          for (const auto& status : array.status)
+            if (status.name == "released: simulation" && status.level == diagnostic_msgs::DiagnosticStatus::ERROR &&
+                status.message.find("lift_off") != std::string::npos) {
+              for (const auto& kv : status.values)
+                if (kv.key == "normal force [N]") force_in_diagnostics = kv.value;
+              return true;
+            }
+        return false;
+      },
+      10.0))
+      << "no diagnostics ERROR naming lift_off";
+  EXPECT_GE(std::stod(force_in_diagnostics), 0.0) << force_in_diagnostics;
+  ASSERT_TRUE(wait_for(
+      [&] {
+        for (const auto& m : log.messages())
+          if (m.name == "/released" && m.level == rosgraph_msgs::Log::ERROR && m.msg.find("lift_off") != std::string::npos)
+            return true;
+        return false;
+      },
+      10.0))
+      << "no log line for the lift-off";
+
+  // ~reset: the event is cleared (""), then reported again at the new start.
+  events.clear();
+  EXPECT_TRUE(trigger("/released/reset").success);
+  ASSERT_TRUE(wait_for([&] { return events.size() >= 2; }, 20.0));
+  EXPECT_EQ(events.messages()[0].data, "");
+  EXPECT_EQ(events.messages()[1].data, "lift_off");
 }
 
 int main(int argc, char** argv) { return node_test::run_node_tests(argc, argv, "test_node_event", 2); }

@@ -23,11 +23,15 @@
 #include <unistd.h>
 
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <string>
 #include <vector>
 
 #include "node_test_helpers.hpp"
+#include "spinning_top/Kill.h"
+#include "spinning_top/Spawn.h"
+#include "spinning_top/TopState.h"
 
 using node_test::finite;
 using node_test::reconfigure;
@@ -188,6 +192,116 @@ TEST(NodeRobustness, MalformedServiceCallsLeaveTheNodeRunning) {
     }
   Recorder<geometry_msgs::PointStamped> points(nh, "/steady/contact_point");
   EXPECT_TRUE(wait_for([&] { return points.size() > 50; }, 10.0)) << "the node stopped publishing";
+}
+
+namespace {
+
+/// The latest ~status of /steady after `action` (which must publish one).
+std::string status_after(Recorder<std_msgs::String>& status, const std::function<void()>& action) {
+  const size_t before = status.size();
+  action();
+  EXPECT_TRUE(wait_for([&] { return status.size() > before; }, 10.0)) << "no ~status";
+  return status.size() > before ? status.messages().back().data : "";
+}
+
+template <class Service>
+typename Service::Response call(const std::string& name, const typename Service::Request& request) {
+  EXPECT_TRUE(ros::service::waitForService(name, ros::Duration(10.0))) << name;
+  Service srv;
+  srv.request = request;
+  EXPECT_TRUE(ros::service::call(name, srv)) << name;
+  return srv.response;
+}
+
+}  // namespace
+
+// Issue 19, blame and silence: a refusal names the key that was changed (a mass of 1e300 makes the
+// sliding top's pendulum rate sqrt(m g h / A) too fast, which the core checks as gravity's); a
+// parameter the node does not have is refused naming it (dynamic_reconfigure's server ignored it,
+// and the node said "applied"); a 100,000-character top name is refused, naming the key, in a
+// message of bounded length.
+TEST(NodeRobustness, RefusalsNameTheKeyAndNothingUnknownIsApplied) {
+  ros::NodeHandle nh;
+  Recorder<std_msgs::String> status(nh, "/steady/status");
+  double mass = 0.0;
+  ASSERT_TRUE(ros::param::get("/steady/mass", mass));
+  std::string message = status_after(status, [&] { EXPECT_EQ(reconfigure("/steady", "mass", 1e300), mass); });
+  EXPECT_EQ(message.rfind("refused: mass: ", 0), 0u) << message;
+
+  dynamic_reconfigure::Reconfigure srv;
+  dynamic_reconfigure::DoubleParameter unknown;
+  unknown.name = "bogus";
+  unknown.value = 1.0;
+  srv.request.config.doubles.push_back(unknown);
+  message = status_after(status, [&] { EXPECT_TRUE(ros::service::call("/steady/set_parameters", srv)); });
+  EXPECT_EQ(message.rfind("refused: bogus: no such live parameter", 0), 0u) << message;
+
+  spinning_top::Spawn::Request spawn;
+  spawn.name = std::string(100000, 'a');
+  const auto refused = call<spinning_top::Spawn>("/steady/spawn", spawn);
+  EXPECT_FALSE(refused.success);
+  EXPECT_EQ(refused.message.rfind("spawn refused: name: ", 0), 0u) << node_test::shown(refused.message);
+  EXPECT_LT(refused.message.size(), 300u) << node_test::shown(refused.message);
+}
+
+// Issue 19, live changes across tops: /steady (viscous) and a spawned fixed-tip top that stops at
+// its release (R < 0 with after_lift_off: stop). friction acts on the viscous top only: a change of
+// it applies there and leaves the fixed tip alone (it used to be refused for every top). A body
+// change (spin) is refused for the stopped top, and so for every top: /steady's spin stays.
+// ~reload to another scene: the diagnostics' hardware id follows (it said the start's scene).
+TEST(NodeRobustness, AKeyThatDoesNotApplyToATopLeavesItAloneAndRefusalsStayAtomic) {
+  ros::NodeHandle nh;
+  Recorder<std_msgs::String> status(nh, "/steady/status");
+  Recorder<spinning_top::TopState> steady(nh, "/steady/state");
+  Recorder<diagnostic_msgs::DiagnosticArray> diagnostics(nh, "/diagnostics");
+  spinning_top::Spawn::Request spawn;
+  spawn.name = "stopped";
+  spawn.scene_file = SPINNING_TOP_SOURCE_DIR "/config/extreme/lift_off.yaml";
+  spawn.keys = {"after_lift_off=stop", "initial/precession_rate=150"};
+  spawn.x = 0.5;
+  const auto spawned = call<spinning_top::Spawn>("/steady/spawn", spawn);
+  ASSERT_TRUE(spawned.success) << spawned.message;
+
+  double friction = 0.0;
+  ASSERT_TRUE(ros::param::get("/steady/friction", friction));
+  std::string message = status_after(status, [&] { EXPECT_EQ(reconfigure("/steady", "friction", 0.03), 0.03); });
+  EXPECT_EQ(message.rfind("applied: ", 0), 0u) << message;
+  double written = 0.0;
+  EXPECT_TRUE(ros::param::get("/steady/friction", written));
+  EXPECT_EQ(written, 0.03) << "the node's own (viscous) keys take it";
+
+  ASSERT_TRUE(wait_for([&] { return steady.size() > 0; }, 10.0));
+  const double spin = steady.messages().back().spin;
+  message = status_after(status, [&] { EXPECT_EQ(reconfigure("/steady", "spin", spin + 10.0), spin); });
+  EXPECT_EQ(message.rfind("refused: spin: ", 0), 0u) << message;
+  EXPECT_NE(message.find("stopped"), std::string::npos) << message;
+  steady.clear();
+  ASSERT_TRUE(wait_for([&] { return steady.size() > 10; }, 10.0));
+  EXPECT_EQ(steady.messages().back().spin, spin) << "a refused change changed /steady";
+
+  spinning_top::Kill::Request kill;
+  kill.name = "stopped";
+  EXPECT_TRUE(call<spinning_top::Kill>("/steady/kill", kill).success);
+  EXPECT_EQ(reconfigure("/steady", "friction", friction), friction);
+
+  // ~reload into the frictionless scene and back: the hardware id follows the scene.
+  auto hardware_id = [&] {
+    const auto arrays = diagnostics.messages();
+    for (auto a = arrays.rbegin(); a != arrays.rend(); ++a)
+      for (const auto& s : a->status)
+        if (s.name == "steady: simulation") return s.hardware_id;
+    return std::string();
+  };
+  ros::param::set("/steady/scene", std::string("frictionless"));
+  ros::param::set("/steady/friction", 0.0);
+  EXPECT_TRUE(trigger("/steady/reload").success);
+  diagnostics.clear();
+  EXPECT_TRUE(wait_for([&] { return hardware_id() == "spinning_top/frictionless"; }, 10.0)) << hardware_id();
+  ros::param::set("/steady/scene", std::string("viscous"));
+  ros::param::set("/steady/friction", friction);
+  EXPECT_TRUE(trigger("/steady/reload").success);
+  diagnostics.clear();
+  EXPECT_TRUE(wait_for([&] { return hardware_id() == "spinning_top/viscous"; }, 10.0)) << hardware_id();
 }
 
 int main(int argc, char** argv) { return node_test::run_node_tests(argc, argv, "test_node_robustness", 2); }

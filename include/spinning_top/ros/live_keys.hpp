@@ -28,6 +28,7 @@ struct LiveKey {
   double SpinningTopConfig::*field;       ///< its value in dynamic_reconfigure's configuration
   double* (*in_top)(SceneConfig& top);    ///< where a top keeps it; null for the node's own
   double* (*in_node)(NodeSettings& node);  ///< where the node keeps it; null for a top's
+  const char* scene_key;  ///< its key in a scene file (initial/spin for spin); null for the node's
 };
 
 /// Every live key, in the order of live_keys.def (and of the cfg).
@@ -38,6 +39,18 @@ std::uint32_t changed_levels(const SpinningTopConfig& config, const SpinningTopC
 
 /// `top` with the value of every key held by a top that differs between `config` and `old`.
 SceneConfig with_changes(SceneConfig top, const SpinningTopConfig& config, const SpinningTopConfig& old);
+
+/// Whether a top of configuration `top` runs with `key` at all: friction acts in the viscous scene
+/// only (validate(SceneConfig) refuses it in the others); every other key acts on every top. A
+/// live change leaves a top alone for the keys that do not apply to it.
+bool applies_to(const LiveKey& key, const SceneConfig& top);
+
+/// What a key that does not apply everywhere needs (for a refusal when no top runs it):
+/// "the viscous scene"; "" for a key that applies to every top.
+const char* applies_only_to(const LiveKey& key);
+
+/// with_changes() restricted to the keys that apply to `top` (applies_to()).
+SceneConfig with_applicable_changes(SceneConfig top, const SpinningTopConfig& config, const SpinningTopConfig& old);
 
 }  // namespace ros_front_end
 }  // namespace spinning_top

@@ -61,9 +61,16 @@ void validate_pacing(double rate, double real_time_factor);
 /// A frame id tf2, URDF and rviz all handle: throws InvalidParameter naming `key`.
 void require_frame(const std::string& key, const std::string& frame);
 
-/// A top's name: one ROS name segment (a letter, then letters, digits, '_'); throws
-/// InvalidParameter naming `key`.
+/// The longest top name: it prefixes the top's frames, topics, services and parameters.
+constexpr std::size_t kMaxTopNameLength = 64;
+
+/// A top's name: one ROS name segment (a letter, then letters, digits, '_'), at most
+/// kMaxTopNameLength characters; throws InvalidParameter naming `key`.
 void require_top_name(const std::string& key, const std::string& name);
+
+/// `text` as a message may quote it: one line (control characters shown as '?'), at most
+/// `limit` characters, then "... (N characters)".
+std::string excerpt(const std::string& text, std::size_t limit = 40);
 
 }  // namespace ros_front_end
 }  // namespace spinning_top

@@ -7,6 +7,7 @@
 #include <geometry_msgs/TransformStamped.h>
 #include <ros/ros.h>
 
+#include <atomic>
 #include <deque>
 #include <functional>
 #include <memory>
@@ -68,11 +69,24 @@ class TopInstance {
   /// integrator settings, keeping the state (Simulator::update).
   /// Throws InvalidParameter and changes nothing; returns true if auto switched its method.
   bool update(const TopParameters& top, const IntegratorSettings& integrator);
-  /// Live changes of the body (m, A, C, h) and of the spin omega_Z, from the current state: the
-  /// attitude, the other rates, the tip's place and the simulated time go on. Refused (throws
-  /// InvalidParameter, nothing changes) for an invalid body or state, after the event that ended
-  /// the run, or while the tip is off the floor (require_on_the_floor()).
-  void change_body(const TopParameters& top, double spin);
+  /// A live change of the body (m, A, C, h), of the spin omega_Z and of the model and integrator
+  /// settings with them, prepared: the new model from the current state, built and checked.
+  struct BodyChange {
+    std::unique_ptr<Simulator> simulator;
+    SceneConfig start;  ///< what ~reset comes back to afterwards
+    TopParameters top;
+    Eigen::Vector2d tip = Eigen::Vector2d::Zero();
+    double time_base = 0.0, origin = 0.0;
+  };
+  /// Refused (throws InvalidParameter, nothing changes) for an invalid body or state, a state the
+  /// new body cannot go on from (an event at once: R < 0 with after_lift_off: stop), after the
+  /// event that ended the run, or while the tip is off the floor (require_on_the_floor()).
+  /// `key`: the changed key a refusal names.
+  BodyChange prepare_body(const TopParameters& top, const IntegratorSettings& integrator, double spin,
+                          const std::string& key) const;
+  /// Applies a prepared change: the attitude, the other rates, the tip's place and the simulated
+  /// time go on. Cannot fail.
+  void change_body(BodyChange change);
   /// [s] the top's simulated time: since its start, reset or set_state (live body changes go on).
   double time() const;
   /// The state at time(), taken once per change of it (every publication of a tick reads it).
@@ -88,16 +102,18 @@ class TopInstance {
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) const;
   Event event() const { return simulator_->event(); }
   /// Whether ~contact_point and ~state both have a subscriber (for ~wait_for_subscriber).
-  bool subscribed() const {
-    return contact_point_publisher_.getNumSubscribers() > 0 && state_publisher_.getNumSubscribers() > 0;
-  }
+  bool subscribed() const { return listeners_->contact_point > 0 && listeners_->state > 0; }
 
  private:
   /// Replaces the simulator (validated first) and rebaselines the energy.
   void start(const SceneConfig& config, double time_base, double world_time);
+  void start(std::unique_ptr<Simulator> simulator, double time_base, double world_time);
   /// The core's origin on the floor such that the current contact point is at tip_xy.
   void place_tip_at(const Eigen::Vector2d& tip_xy);
   void handle_event(Event event);
+  /// A run that ended where it started (R < 0 at the release with after_lift_off: stop, or a
+  /// start the core ends at once): reported as any event, once (advance() does it).
+  bool start_event_reported_ = false;
   /// `event` on ~event (its name) and ~event_stamped (with the state `at`, the simulator's).
   void publish_event(const char* event, const Snapshot& at, bool terminal);
   void rebaseline_energy();
@@ -119,6 +135,14 @@ class TopInstance {
   StampOf stamp_of_;
   std::deque<Vector3> trace_;
   ros::NodeHandle nh_;  // ~ or ~<name>
+  /// Subscribers of each per-tick topic, counted by the publishers' connect and disconnect
+  /// callbacks. A topic without one is not published: roscpp finds a topic's publication by a
+  /// linear search among all of the node's (in publish() and getNumSubscribers()), so with n tops
+  /// every publication of a tick cost O(n), and a tick O(n^2) (1,000 tops: 7,000 publications).
+  struct Listeners {
+    std::atomic<int> contact_point{0}, normal_force{0}, twist{0}, state{0}, markers{0};
+  };
+  std::shared_ptr<Listeners> listeners_ = std::make_shared<Listeners>();
   ros::Publisher contact_point_publisher_, normal_force_publisher_, twist_publisher_, state_publisher_,
       marker_publisher_, event_publisher_, event_stamped_publisher_;
 };

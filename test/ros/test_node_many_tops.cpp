@@ -1,0 +1,191 @@
+// rostest (test/node_many_tops.test), issue 19: a node with hundreds of tops starts, spawns and
+// stops cleanly. The test starts the node binary itself (fork/exec) on the test's master.
+//   - SIGINT at any point of the start-up ends the node with exit code 0 (it trapped, SIGTRAP,
+//     exit 133, publishing /tf_static on a publisher that the shutdown had invalidated);
+//   - a spawn does the same work whatever the count of tops: the messages and parameters one
+//     spawn publishes and writes, counted, are the same for the 1st and the 200th spawn;
+//   - SIGINT with many tops: exit code 0 (the time it takes is printed, not asserted).
+// Nothing here depends on the machine's load: the SIGINTs are sent at stages of the start the
+// test sees (parameters the node writes), and the wall bounds are hang guards only.
+#include <gtest/gtest.h>
+#include <ros/ros.h>
+#include <rosgraph_msgs/Log.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <tf2_msgs/TFMessage.h>
+#include <unistd.h>
+#include <xmlrpcpp/XmlRpcValue.h>
+
+#include <ros/master.h>
+#include <ros/this_node.h>
+
+#include <cstdio>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "node_test_helpers.hpp"
+#include "spinning_top/Spawn.h"
+
+using node_test::Recorder;
+using node_test::wait_for;
+
+namespace {
+
+/// The node binary as `name`, with private parameters given on the parameter server first.
+pid_t start_node(const std::string& name, const std::vector<std::string>& arguments = {}) {
+  std::vector<std::string> args = {SPINNING_TOP_NODE_EXECUTABLE, "__name:=" + name};
+  args.insert(args.end(), arguments.begin(), arguments.end());
+  const pid_t pid = fork();
+  if (pid == 0) {
+    std::vector<char*> argv;
+    for (std::string& a : args) argv.push_back(&a[0]);
+    argv.push_back(nullptr);
+    execv(argv[0], argv.data());
+    _exit(127);
+  }
+  return pid;
+}
+
+/// Waits for the child's exit (at most `guard` wall seconds, then SIGKILL); its wait status, or -1.
+int wait_exit(pid_t pid, double guard, double* seconds = nullptr) {
+  const ros::WallTime start = ros::WallTime::now();
+  int status = 0;
+  pid_t done = 0;
+  while ((done = waitpid(pid, &status, WNOHANG)) == 0 && (ros::WallTime::now() - start).toSec() < guard)
+    ros::WallDuration(0.005).sleep();
+  if (seconds != nullptr) *seconds = (ros::WallTime::now() - start).toSec();
+  if (done == 0) {
+    kill(pid, SIGKILL);
+    waitpid(pid, &status, 0);
+    return -1;
+  }
+  return status;
+}
+
+std::string describe(int status) {
+  if (status == -1) return "still running after the guard (killed)";
+  if (WIFSIGNALED(status)) return "killed by signal " + std::to_string(WTERMSIG(status));
+  return "exit code " + std::to_string(WEXITSTATUS(status));
+}
+
+/// ~tops: `count` names t000, t001, ... for the node `name`, every pivot static (fixed tip,
+/// after_lift_off: stop), so that the start publishes /tf_static.
+void many_tops(const std::string& name, int count) {
+  XmlRpc::XmlRpcValue tops;
+  tops.setSize(count);
+  for (int i = 0; i < count; ++i) {
+    char top[16];
+    std::snprintf(top, sizeof top, "t%03d", i);
+    tops[i] = std::string(top);
+  }
+  ros::param::del("/" + name);
+  ros::param::set("/" + name + "/tops", tops);
+  ros::param::set("/" + name + "/after_lift_off", std::string("stop"));
+  ros::param::set("/" + name + "/rate", 100.0);
+  ros::param::set("/" + name + "/publish_clock", false);
+  ros::param::set("/" + name + "/body_frame", name + "_top");
+  ros::param::set("/" + name + "/contact_frame", name + "_contact");
+}
+
+}  // namespace
+
+// SIGINT while the tops are being started (after the 10th, after the 150th) and once the last
+// one is there: each time a clean exit, 0, within the guard.
+TEST(ManyTops, SigintDuringTheStartEndsTheNodeCleanly) {
+  const int count = 300;
+  for (const std::string stage : {"t010", "t150", "t299"}) {
+    const std::string name = "starting_" + stage;
+    many_tops(name, count);
+    const pid_t pid = start_node(name);
+    ASSERT_GT(pid, 0);
+    // Each top writes its URDF as it starts: the stage is there when its parameter is.
+    const bool reached = wait_for([&] { return ros::param::has("/" + name + "/" + stage + "/robot_description"); }, 120.0);
+    ASSERT_EQ(kill(pid, SIGINT), 0);
+    double seconds = 0.0;
+    const int status = wait_exit(pid, 60.0, &seconds);
+    EXPECT_TRUE(reached) << stage << " never started";
+    EXPECT_TRUE(status != -1 && WIFEXITED(status) && WEXITSTATUS(status) == 0)
+        << "SIGINT after " << stage << " started: " << describe(status);
+    std::printf("[ measured ] SIGINT after %s of %d tops started: %s, %.3f s after SIGINT\n", stage.c_str(), count,
+                describe(status).c_str(), seconds);
+    ros::param::del("/" + name);
+  }
+}
+
+namespace {
+
+/// The topics and services the master lists for `node` (getSystemState).
+std::pair<int, int> registrations_of(const std::string& node) {
+  XmlRpc::XmlRpcValue args, result, payload;
+  args[0] = ros::this_node::getName();
+  if (!ros::master::execute("getSystemState", args, result, payload, true)) return {-1, -1};
+  int topics = 0, services = 0;
+  for (int kind : {0, 2})  // publishers, services
+    for (int i = 0; i < payload[kind].size(); ++i)
+      for (int j = 0; j < payload[kind][i][1].size(); ++j)
+        if (static_cast<std::string>(payload[kind][i][1][j]) == node) ++(kind == 0 ? topics : services);
+  return {topics, services};
+}
+
+}  // namespace
+
+// What one spawn does, counted: /tf_static is republished only when the set of pivots changes
+// (each spawn sent every pivot again: with 50 pivots, 50 transforms per spawn of any top), and a
+// spawn registers the same 7 topics and 1 service for the 1st top as for the 30th. Then SIGINT:
+// exit code 0, and the master keeps nothing of the node (its topics unregistered in one call).
+TEST(ManyTops, ASpawnDoesTheSameWorkWhateverTheCountAndTheNodeLeavesCleanly) {
+  const std::string name = "spawner";
+  many_tops(name, 50);
+  ros::param::set("/" + name + "/start_paused", true);
+  ros::NodeHandle nh;
+  Recorder<tf2_msgs::TFMessage> tf_static(nh, "/tf_static", 1000);
+  const pid_t pid = start_node(name);
+  ASSERT_GT(pid, 0);
+  ASSERT_TRUE(ros::service::waitForService("/" + name + "/spawn", ros::Duration(120.0)));
+  ASSERT_TRUE(wait_for([&] { return tf_static.size() >= 1; }, 30.0)) << "no /tf_static";
+  ros::WallDuration(0.5).sleep();
+  ASSERT_EQ(tf_static.size(), 1u) << "the start published its pivots more than once";
+  EXPECT_EQ(tf_static.messages().back().transforms.size(), 50u);
+
+  ros::ServiceClient spawn = nh.serviceClient<spinning_top::Spawn>("/" + name + "/spawn", true);
+  std::vector<std::pair<int, int>> added;  // registrations each spawn added
+  for (int i = 0; i < 30; ++i) {
+    const auto before = registrations_of("/" + name);
+    spinning_top::Spawn srv;
+    srv.request.name = "flying" + std::to_string(i);
+    srv.request.keys = {"after_lift_off=fly"};  // a tip that may fly: no static pivot
+    srv.request.x = 0.1 * i;
+    ASSERT_TRUE(spawn.call(srv) && srv.response.success) << srv.response.message;
+    const auto after = registrations_of("/" + name);
+    added.emplace_back(after.first - before.first, after.second - before.second);
+  }
+  for (std::size_t i = 0; i < added.size(); ++i) {
+    EXPECT_EQ(added[i].first, 7) << "topics registered by spawn " << i;
+    EXPECT_EQ(added[i].second, 1) << "services registered by spawn " << i;
+  }
+  spinning_top::Spawn pivot;
+  pivot.request.name = "pivoting";
+  pivot.request.keys = {"after_lift_off=stop"};
+  pivot.request.y = 0.5;
+  ASSERT_TRUE(spawn.call(pivot) && pivot.response.success) << pivot.response.message;
+  ASSERT_TRUE(wait_for([&] { return tf_static.size() >= 2; }, 10.0));
+  ros::WallDuration(0.5).sleep();
+  const auto statics = tf_static.messages();
+  EXPECT_EQ(statics.size(), 2u) << "/tf_static messages: 1 at the start, then 1 for the one new pivot";
+  EXPECT_EQ(statics.back().transforms.size(), 51u);
+
+  const ros::WallTime sent = ros::WallTime::now();
+  ASSERT_EQ(kill(pid, SIGINT), 0);
+  double seconds = 0.0;
+  const int status = wait_exit(pid, 60.0, &seconds);
+  EXPECT_TRUE(status != -1 && WIFEXITED(status) && WEXITSTATUS(status) == 0) << describe(status);
+  const auto left = registrations_of("/" + name);
+  EXPECT_EQ(left.first, 0) << "topics of the node left on the master";
+  EXPECT_EQ(left.second, 0) << "services of the node left on the master";
+  std::printf("[ measured ] SIGINT with 81 tops: %s, %.3f s\n", describe(status).c_str(),
+              (ros::WallTime::now() - sent).toSec());
+  ros::param::del("/" + name);
+}
+
+int main(int argc, char** argv) { return node_test::run_node_tests(argc, argv, "test_node_many_tops", 2); }
