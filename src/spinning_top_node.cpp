@@ -1,5 +1,4 @@
 // spinning_top_node: the ROS front end of the spinning-top simulator (see README.md, "The ROS node").
-#include <ros/callback_queue.h>
 #include <ros/ros.h>
 
 #include <csignal>
@@ -24,13 +23,17 @@ int main(int argc, char** argv) {
   ros::init(argc, argv, "spinning_top", ros::init_options::NoSigintHandler);
   std::signal(SIGINT, on_sigint);
   // Held outside the try: destroying the last NodeHandle shuts ROS (and its logging) down,
-  // and the fatal message below must still be printed.
+  // and the fatal message below must still be printed. Every callback of the node (the handles
+  // made from these inherit the queue) goes through its own queue.
+  spinning_top::ros_front_end::NodeCallbackQueue queue;
   ros::NodeHandle nh, private_nh("~");
+  nh.setCallbackQueue(&queue);
+  private_nh.setCallbackQueue(&queue);
   try {
     SpinningTopNode node(nh, private_nh);
     // ros::spin(), ending at SIGINT as well as at a shutdown from elsewhere (rosnode kill).
     while (ros::ok() && !SpinningTopNode::stop_requested())
-      ros::getGlobalCallbackQueue()->callAvailable(ros::WallDuration(0.1));
+      queue.callAvailable(ros::WallDuration(0.1));
     if (SpinningTopNode::stop_requested() && ros::ok()) node.unregister_topics_at_once();
     ros::shutdown();
   } catch (const spinning_top::InvalidParameter& error) {

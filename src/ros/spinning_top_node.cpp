@@ -2,6 +2,7 @@
 
 #include <ros/callback_queue.h>
 #include <ros/master.h>
+#include <ros/names.h>
 #include <ros/publication.h>
 #include <ros/this_node.h>
 #include <ros/topic_manager.h>
@@ -258,6 +259,9 @@ void SpinningTopNode::stop_if_shutting_down(const char* step) {
 void SpinningTopNode::unregister_topics_at_once() {
   std::vector<std::string> topics;
   ros::this_node::getAdvertisedTopics(topics);
+  // /rosout stays with roscpp: its logging thread may still publish there, and roscpp aborts on a
+  // message published on a dropped publication. Only this thread publishes on the others.
+  topics.erase(std::remove(topics.begin(), topics.end(), ros::names::resolve("/rosout")), topics.end());
   if (topics.empty()) return;
   XmlRpc::XmlRpcValue calls;
   for (std::size_t i = 0; i < topics.size(); ++i) {
@@ -277,12 +281,12 @@ void SpinningTopNode::unregister_topics_at_once() {
                     result.size() == static_cast<int>(topics.size());
   client.close();
   if (!done) return;  // roscpp's shutdown unregisters them, one call each
+  ROS_INFO("spinning_top: %zu topics unregistered from the master in one call (%.3f s)", topics.size(),
+           (ros::WallTime::now() - start).toSec());
   for (const std::string& topic : topics) {
     const ros::PublicationPtr publication = ros::TopicManager::instance()->lookupPublication(topic);
     if (publication) publication->drop();  // roscpp's shutdown skips a dropped publication
   }
-  ROS_INFO("spinning_top: %zu topics unregistered from the master in one call (%.3f s)", topics.size(),
-           (ros::WallTime::now() - start).toSec());
 }
 
 NodeKeys SpinningTopNode::read_node_keys(const ParameterTree& own) const {
@@ -508,7 +512,8 @@ void SpinningTopNode::on_timer(const ros::WallTimerEvent&) {
     // ticks, rather than after the whole budget (the timer, late, fires again at once). With
     // many tops a node behind the wall clock answers ~spawn within one tick, however long the
     // budget (a spawn waited for it: 8 ms with 1 top, 61 ms with 300).
-    if (!ros::getGlobalCallbackQueue()->isEmpty()) break;
+    auto* queue = dynamic_cast<NodeCallbackQueue*>(nh_.getCallbackQueue());
+    if (queue != nullptr && queue->others_waiting()) break;
   }
   if (paced) last_lag_ = clock_.lag(now.toSec());
 }
