@@ -107,6 +107,13 @@ py::dict snapshot_dict(const Snapshot& s) {
   return d;
 }
 
+/// A time as a message shows it (6 significant digits).
+std::string brief_time(double t) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.6g", t);
+  return text;
+}
+
 /// A run's step allowance from Python: a whole number >= 1, or inf (the default) for no limit.
 double checked_max_steps(double max_steps) {
   if (!(max_steps >= 1.0 && (max_steps == std::floor(max_steps) || std::isinf(max_steps))))
@@ -368,6 +375,11 @@ PYBIND11_MODULE(_core, m) {
           "advance_to",
           [](Simulator& s, double t, double max_steps) {
             checked_max_steps(max_steps);
+            // Time only moves forward: an earlier t did nothing and said nothing (issue 19). (A
+            // non-finite t: the core refuses it.)
+            if (t < s.time())
+              throw py::value_error("advance_to: t = " + brief_time(t) + " s is before the simulator's time " +
+                                    brief_time(s.time()) + " s; it only moves forward (reset() starts again)");
             Event event;
             {
               py::gil_scoped_release release;
