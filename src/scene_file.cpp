@@ -153,8 +153,9 @@ std::string both_readings(const std::string& text) {
 
 /// Why YAML 1.1 (rosparam, PyYAML: how the node's launch file loads a scene file) and YAML 1.2
 /// (yaml-cpp: simulate, ~spawn, Python, sweeps) would not read the plain scalar `text` as the
-/// same number, or why it is no number: "" if both read it as the same decimal number, which
-/// parse_number() then reads (strtod) as the double Python's float() gives.
+/// same number; "" if both read it as the same decimal number, which parse_number() then reads
+/// (strtod) as the double Python's float() gives, or both read it as text that strtod does not
+/// read either (mass: abc), which parse_number() refuses as it refuses --set mass=abc.
 ///
 /// Accepted, the forms on which both agree (YAML 1.1 as PyYAML implements it):
 ///   integers   [-+]?(0|[1-9][0-9]*), within 32 bits (rosparam sends ints over XML-RPC, whose
@@ -163,9 +164,14 @@ std::string both_readings(const std::string& text) {
 ///              either with an exponent [eE][-+][0-9]+ (signed: YAML 1.1 reads 1e5 and 1.0e5
 ///              as text)
 std::string yaml_number_problem(const std::string& text) {
-  // Before any pattern: std::regex recurses per character, and no number needs this many.
-  if (text.size() > kMaxNumberCharacters)
-    return "'" + brief(text) + "' is not a number (a double needs at most 17 significant digits)";
+  // Before any pattern: std::regex recurses per character, and no number needs this many (text
+  // that is no number at all is left to the validation, which says so).
+  if (text.size() > kMaxNumberCharacters) {
+    char* end = nullptr;
+    std::strtod(text.c_str(), &end);
+    if (end == text.c_str() || *end != '\0') return "";
+    return "'" + brief(text) + "' has more digits than a number needs (a double has at most 17 significant digits)";
+  }
   static const std::regex kInteger = pattern("^[-+]?(0|[1-9][0-9]*)$");
   static const std::regex kDecimal = pattern("^[-+]?[0-9]+\\.[0-9]*([eE][-+][0-9]+)?$");
   static const std::regex kLeadingDot = pattern("^\\.[0-9]+([eE][-+][0-9]+)?$");
@@ -208,7 +214,13 @@ std::string yaml_number_problem(const std::string& text) {
   if (matches(text, kAngle))
     return quoted + " is an angle that rosparam converts (deg(...), rad(...)) and YAML 1.2 reads as text: write the "
                     "number of radians";
-  return quoted + " is not a number";
+  // Text to both YAML versions: the validation refuses it as not a number (parse_number), unless
+  // strtod would read it whole (0x1p3, infinity), which YAML does not.
+  char* end = nullptr;
+  std::strtod(text.c_str(), &end);
+  if (end != text.c_str() && *end == '\0')
+    return quoted + " is text to YAML (1.1 and 1.2), not a number: write a decimal number";
+  return "";
 }
 
 /// Whether `key` is a configuration key whose value is a number (not a name such as scene).

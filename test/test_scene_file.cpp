@@ -197,12 +197,19 @@ TEST_F(SceneFileTest, NumbersYaml11And12ReadDifferentlyAreRefusedNamingTheKey) {
       {"yes", "boolean"},       {"on", "boolean"},        {"off", "boolean"},
       {".inf", "not a finite number"}, {"-.inf", "not a finite number"}, {".nan", "not a finite number"},
       {"inf", "not a finite number"},  {"deg(30)", "rosparam converts"}, {"2147483648", "beyond 32 bits"},
-      {"-99999999999", "beyond 32 bits"}, {"9.8 m/s", "is not a number"},
+      {"-99999999999", "beyond 32 bits"}, {"0x1p3", "text to YAML"}, {"-0x1.8p1", "text to YAML"}, {"infinity", "not a finite number"},
+      {std::string(70, '9'), "more digits than a number needs"},
   };
   for (const auto& [value, why] : refused) {
     const std::string message = refusal(kScene + "gravity: " + value + "\n");
-    EXPECT_EQ(message.rfind("gravity: '" + value + "'", 0), 0u) << value << " -> " << message;
+    EXPECT_EQ(message.rfind("gravity: '" + value.substr(0, 40), 0), 0u) << value << " -> " << message;
     EXPECT_TRUE(contains(message, why)) << value << " -> " << message;
+  }
+  // Text to both (mass: abc) is left to the validation, which refuses it as it refuses --set.
+  for (const std::string value : {"9.8 m/s", "abc", "1,5", "2001-01-01"}) {
+    const ParameterMap keys = read_scene_file(write(kScene + "gravity: " + value + "\n"));
+    EXPECT_EQ(keys.at("gravity"), value);
+    EXPECT_THROW(parse_scene_config(keys, true), InvalidParameter) << value;
   }
   // The forms both read as the same number keep their text (parse_number reads it).
   for (const std::string value : {"9.8", "10", "-3", "+2.5", "0", "-0.0", ".5", "1.", "4.0e-5", "1.0e+7", "1.5E+3",
@@ -220,11 +227,20 @@ TEST_F(SceneFileTest, ShippedSceneFilesAreRead) {
   }
 }
 
-// A long value is not echoed in full (item 12's 20 MB message).
+// A long value is not echoed in full (item 12's 20 MB message), by the reader or the validation.
 TEST_F(SceneFileTest, MessagesShowAtMostTheStartOfALongValue) {
-  const std::string message = refusal(kScene + "gravity: " + std::string(100000, '7') + "x\n");
-  EXPECT_LT(message.size(), 300u) << message.substr(0, 400);
-  EXPECT_TRUE(contains(message, "(100001 characters)")) << message;
+  for (const std::string value : {std::string(100000, '7'), std::string(100000, '7') + "x"}) {
+    std::string message = refusal(kScene + "gravity: " + value + "\n");
+    if (message.empty()) {
+      try {
+        parse_scene_config(read_scene_file(write(kScene + "gravity: " + value + "\n")), true);
+      } catch (const InvalidParameter& e) {
+        message = e.what();
+      }
+    }
+    EXPECT_LT(message.size(), 300u) << message.substr(0, 400);
+    EXPECT_TRUE(contains(message, "(" + std::to_string(value.size()) + " characters)")) << message.substr(0, 400);
+  }
 }
 
 }  // namespace

@@ -42,7 +42,8 @@ def test_a_number_the_core_reads_is_the_number_rosparam_reads(tmp_path, text):
     path.write_text(SCENE + "gravity: " + text + "\n")
     try:
         keys = st.read_scene_file(str(path))
-    except st.SceneFileError as refused:
+        st.validate(keys, require_all=True)
+    except (st.SceneFileError, st.InvalidParameter) as refused:
         assert str(refused).startswith("gravity: "), str(refused)
         return
     assert keys["gravity"] == text
