@@ -76,11 +76,13 @@ const std::vector<ParameterSpec>& parameter_specs() {
   return specs;
 }
 
-std::string brief_text(const std::string& text) {
-  constexpr std::size_t kLimit = 40;
+std::string brief_text(const std::string& text, std::size_t limit) {
+  // Whole up to `limit` characters; else the first half of that, so that a number of 300 digits
+  // shows 20 of them, and its length.
+  const std::size_t shown_characters = text.size() <= limit ? text.size() : limit / 2;
   std::string shown;
   // Control characters (a newline, a NUL in a key) as escapes: a message stays one line.
-  for (std::size_t i = 0; i < text.size() && i < kLimit; ++i) {
+  for (std::size_t i = 0; i < shown_characters; ++i) {
     const unsigned char c = static_cast<unsigned char>(text[i]);
     if (c >= 0x20 && c != 0x7f) {
       shown += text[i];
@@ -90,7 +92,7 @@ std::string brief_text(const std::string& text) {
       shown += escape;
     }
   }
-  if (text.size() > kLimit) shown += "... (" + std::to_string(text.size()) + " characters)";
+  if (text.size() > limit) shown += "... (" + std::to_string(text.size()) + " characters)";
   return shown;
 }
 

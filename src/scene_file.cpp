@@ -41,29 +41,13 @@ constexpr int kMaxDepth = 16;
 /// need 25; a few more leave room for zeros written out (0.000001).
 constexpr std::size_t kMaxNumberCharacters = 64;
 
-/// `text` as shown in a message: whole up to `limit` characters, else its start and its length;
-/// control characters (a newline in a quoted key) as escapes, so that a message is one line.
-std::string brief(const std::string& text, std::size_t limit = 40) {
-  std::string shown;
-  for (std::size_t i = 0; i < text.size() && i < limit; ++i) {
-    const unsigned char c = static_cast<unsigned char>(text[i]);
-    if (c >= 0x20 && c != 0x7f) {
-      shown += text[i];
-    } else {
-      char escape[8];
-      std::snprintf(escape, sizeof escape, "\\x%02x", c);
-      shown += escape;
-    }
-  }
-  if (text.size() > limit) shown += "... (" + std::to_string(text.size()) + " characters)";
-  return shown;
-}
+std::string brief(const std::string& text, std::size_t limit = 40) { return brief_text(text, limit); }
 
 /// A path as shown in a message (a path may be long; its end is the file's name).
 std::string shown_path(const std::string& path) {
   constexpr std::size_t kLimit = 160;
   if (path.size() <= kLimit) return brief(path, kLimit);
-  return brief(path.substr(0, 40), 40) + "..." + brief(path.substr(path.size() - (kLimit - 43)), kLimit);
+  return brief(path.substr(0, 40), 40) + "..." + brief(path.substr(path.size() - 117), kLimit);
 }
 
 class FileDescriptor {
@@ -189,7 +173,7 @@ std::string yaml_number_problem(const std::string& text) {
     const std::string digits = text.find_first_of("+-") == 0 ? text.substr(1) : text;
     if (digits.size() > 10 || std::stod(digits) > 2147483647.0)
       return quoted + " is an integer beyond 32 bits, which rosparam cannot hand to the node (XML-RPC integers are "
-                      "32-bit): write it with a decimal point, e.g. " + brief(text) + ".0";
+                      "32-bit): write it with a decimal point, e.g. " + (text.size() <= 20 ? text + ".0" : "1.0e+20");
     return "";
   }
   if (matches(text, kDecimal) || matches(text, kLeadingDot))
@@ -276,11 +260,12 @@ class SceneFileHandler : public YAML::EventHandler {
 
   void OnAlias(const YAML::Mark& mark, YAML::anchor_t) override {
     count(mark);
-    fail(mark, "an alias (*name): scene files take no anchors or aliases (YAML 1.1 and 1.2 merge them differently, "
-               "and an alias can expand without bound); write each value out");
+    refuse_reference(mark, "an alias (*name)");
   }
 
-  void OnAnchor(const YAML::Mark& mark, const std::string&) override { refuse_anchor(mark); }
+  void OnAnchor(const YAML::Mark& mark, const std::string& name) override {
+    refuse_reference(mark, "an anchor (&" + brief(name) + ")");
+  }
 
   void OnScalar(const YAML::Mark& mark, const std::string& tag, YAML::anchor_t anchor, const std::string& value) override {
     visit(mark, anchor);
@@ -358,9 +343,12 @@ class SceneFileHandler : public YAML::EventHandler {
     throw SceneFileError(file_ + ":" + std::to_string(mark.line + 1) + ":" + std::to_string(mark.column + 1) + ": " + what);
   }
 
-  void refuse_anchor(const YAML::Mark& mark) const {
-    fail(mark, "an anchor (&name): scene files take no anchors or aliases (YAML 1.1 and 1.2 merge them differently, "
-               "and an alias can expand without bound); write each value out");
+  /// An anchor or an alias, named by the key whose value it is (else by where it is).
+  void refuse_reference(const YAML::Mark& mark, const std::string& what) const {
+    const std::string why = what + ": scene files take no anchors or aliases (YAML 1.1 and 1.2 merge them "
+                                   "differently, and an alias can expand without bound); write each value out";
+    if (!frames_.empty() && !frames_.back().expecting_key) throw SceneFileError(value_key() + ": " + why + where(mark));
+    fail(mark, why);
   }
 
   void count(const YAML::Mark& mark) {
@@ -370,7 +358,7 @@ class SceneFileHandler : public YAML::EventHandler {
 
   void visit(const YAML::Mark& mark, YAML::anchor_t anchor) {
     count(mark);
-    if (anchor != YAML::NullAnchor) refuse_anchor(mark);
+    if (anchor != YAML::NullAnchor) refuse_reference(mark, "an anchor (&name)");
   }
 
   std::string file_;

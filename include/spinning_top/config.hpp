@@ -37,9 +37,10 @@ SceneConfig parse_scene_config(const ParameterMap& values, bool require_all);
 /// (whose message shows at most the text's first 40 characters).
 double parse_number(const std::string& key, const std::string& text);
 
-/// `text` as a message shows a value someone gave: whole up to 40 characters, else its start and
-/// its length (a 20 MB value is not echoed).
-std::string brief_text(const std::string& text);
+/// `text` as a message shows a value someone gave: whole up to `limit` characters, else its first
+/// limit / 2 and its length (a 20 MB value is not echoed, a 300-digit number shows 20 digits);
+/// control characters escaped (\x0a), so that a message is one line.
+std::string brief_text(const std::string& text, std::size_t limit = 40);
 
 /// The known name nearest to `name` if it is a near miss (at most 2 edits, Levenshtein, and
 /// fewer than half its letters), else "": for "did you mean" hints on unknown keys.
