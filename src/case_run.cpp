@@ -52,6 +52,10 @@ void validate(const CaseSettings& settings) {
   };
   positive("duration", settings.duration);
   positive("sample_rate", settings.sample_rate);
+  if (!(settings.duration <= kMaxSimulatedTime))
+    throw InvalidParameter("duration", "must be at most " + brief_number(kMaxSimulatedTime) +
+                                           " s (32 years; beyond it the state loses its meaning), got " +
+                                           brief_number(settings.duration));
   if (!(settings.duration * settings.sample_rate <= 1e9)) {
     // Blame the one further beyond its default: CaseSettings(1e300) is the duration's fault.
     const CaseSettings defaults;

@@ -126,7 +126,7 @@ void print_help(std::ostream& out) {
          "Options:\n"
          "  --config FILE.yaml   scene file (required), e.g. config/fixed_tip.yaml\n"
          "  --set key=value      overrides one key of the scene file (repeatable; the last wins)\n"
-         "  --duration SECONDS   simulated time to run, > 0 (default 10)\n"
+         "  --duration SECONDS   simulated time to run, > 0 and at most 1e9 (default 10)\n"
          "  --output-rate HZ     output rows per simulated second, > 0 (default 100)\n"
          "  --output FILE.csv    output file (default and '-': stdout). A new or regular file is\n"
          "                       written to a temporary file beside it and renamed, so it appears\n"
@@ -286,6 +286,10 @@ Options parse_options(int argc, char** argv) {
     } else if (name == "--duration") {
       once(seen_duration);
       options.duration = parse_option_number(name, value);
+      // --duration 1e20 --output-rate 1e-20 ran exact to NaN rows, exit 0 (kMaxSimulatedTime).
+      if (!(options.duration <= kMaxSimulatedTime))
+        throw UsageError("--duration: must be at most 1e9 s (32 years; beyond it the state loses its meaning), got '" +
+                         brief_text(value) + "'");
     } else if (name == "--output-rate") {
       once(seen_rate);
       options.output_rate = parse_option_number(name, value);

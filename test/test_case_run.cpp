@@ -153,6 +153,7 @@ TEST(RunCase, RefusesBadSettingsNamingThem) {
                                std::pair{CaseSettings{10.0, 1e3, 0.5}, "max_steps"},
                                std::pair{CaseSettings{1e300, 1e3, 1e8}, "duration"},
                                std::pair{CaseSettings{1e7, 1e3, 1e8}, "duration"},
+                               std::pair{CaseSettings{2e9, 1e-3, 1e8}, "duration"},  // beyond 1e9 s
                                std::pair{CaseSettings{10.0, 1e300, 1e8}, "sample_rate"},
                                std::pair{CaseSettings{-1e300, 1e3, 1e8}, "duration"},
                                std::pair{CaseSettings{10.0, 1e3, 1e300}, "max_steps"}}) {

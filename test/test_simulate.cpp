@@ -606,6 +606,8 @@ TEST_F(SimulateTest, BadInputExitsWithCode2NamesTheCulpritAndWritesNothing) {
       {{"--config", aliased}, "anchor"},
       {{"--config", kViscousYaml, "--set", "initial/velocity_x=1e300"}, "initial/velocity_x"},
       {{"--config", kFixedTipYaml, "--set", "mass=" + std::string(100000, '9') + "x"}, "(100001 characters)"},
+      // exact ran to NaN rows at t = 1e20 s, exit 0 (found by the attack harness).
+      {{"--config", kFixedTipYaml, "--duration", "1e20", "--output-rate", "1e-20"}, "--duration: must be at most 1e9 s"},
   };
   const std::string csv = output_dir_ + "/run.csv";
   for (const Case& c : cases) {

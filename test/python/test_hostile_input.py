@@ -115,3 +115,26 @@ def test_case_settings_blame_the_culprit_with_short_numbers():
     with pytest.raises(st.InvalidParameter) as refused:
         st.CaseSettings(10.0, 1e300)
     assert refused.value.key == "sample_rate"
+
+
+def test_times_beyond_1e9_s_and_malformed_arguments_are_refused_naming_them():
+    # Found by the attack harness: run(np.linspace(0, 1e300, 3)) gave NaN quaternions without an
+    # event (exact: E = 2e231 at 1e17 s). The longest simulated time is 1e9 s.
+    sim = st.Simulator({"scene": "frictionless"})
+    with pytest.raises(ValueError, match="^times: at most 1e9 s"):
+        sim.run(np.linspace(0, 1e300, 3))
+    with pytest.raises(ValueError, match="t must be at most 1e9 s"):
+        sim.advance_to(1e20)
+    with pytest.raises(st.InvalidParameter) as refused:
+        st.CaseSettings(2e9, 1e-3)
+    assert refused.value.key == "duration"
+    with pytest.raises(ValueError, match="^times: must be one-dimensional"):
+        sim.run(np.zeros((2, 2)))
+    with pytest.raises(st.InvalidParameter) as refused:
+        st.validate({"scene": "fixed_tip", "step": np.array([0.1, 0.2])})
+    assert refused.value.key == "step"
+    with pytest.raises(ValueError, match="^initial/spin: must be numbers"):
+        st.run_cases({"scene": "fixed_tip"}, {"initial/spin": ["a"]}, st.CaseSettings(0.1))
+    with pytest.raises(ValueError, match="^initial/spin: no values"):
+        st.run_cases({"scene": "fixed_tip"}, {"initial/spin": []}, st.CaseSettings(0.1))
+    assert sim.time == 0.0
