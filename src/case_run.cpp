@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <optional>
 
@@ -35,17 +36,36 @@ SampledRun sample_run(Simulator& simulator, long long count, const std::function
   return run;
 }
 
+namespace {
+/// A number as a message shows it: 6 significant digits (never the 301 digits of std::to_string(1e300)).
+std::string brief_number(double value) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.6g", value);
+  return text;
+}
+}  // namespace
+
 void validate(const CaseSettings& settings) {
   auto positive = [](const char* key, double value) {
     if (!(std::isfinite(value) && value > 0.0))
-      throw InvalidParameter(key, "must be a finite number > 0, got " + std::to_string(value));
+      throw InvalidParameter(key, "must be a finite number > 0, got " + brief_number(value));
   };
   positive("duration", settings.duration);
   positive("sample_rate", settings.sample_rate);
-  if (!(settings.duration * settings.sample_rate <= 1e9))
-    throw InvalidParameter("sample_rate", "duration x sample_rate asks for more than 1e9 samples");
+  if (!(settings.duration <= kMaxSimulatedTime))
+    throw InvalidParameter("duration", "must be at most " + brief_number(kMaxSimulatedTime) +
+                                           " s (32 years; beyond it the state loses its meaning), got " +
+                                           brief_number(settings.duration));
+  if (!(settings.duration * settings.sample_rate <= 1e9)) {
+    // Blame the one further beyond its default: CaseSettings(1e300) is the duration's fault.
+    const CaseSettings defaults;
+    const bool duration = settings.duration / defaults.duration >= settings.sample_rate / defaults.sample_rate;
+    throw InvalidParameter(duration ? "duration" : "sample_rate",
+                           "duration x sample_rate = " + brief_number(settings.duration) + " s x " +
+                               brief_number(settings.sample_rate) + " Hz asks for more than 1e9 samples");
+  }
   if (!(settings.max_steps >= 1.0 && settings.max_steps <= 1e15 && settings.max_steps == std::floor(settings.max_steps)))
-    throw InvalidParameter("max_steps", "must be a whole number in [1, 1e15], got " + std::to_string(settings.max_steps));
+    throw InvalidParameter("max_steps", "must be a whole number in [1, 1e15], got " + brief_number(settings.max_steps));
 }
 
 double tilt_of(const Quaternion& q) {

@@ -50,7 +50,14 @@ ParameterMap to_parameter_map(const py::dict& keys) {
   ParameterMap values;
   for (const auto& [key, value] : keys) {
     if (!py::isinstance<py::str>(key)) throw py::type_error("configuration keys are strings, e.g. 'initial/spin'");
-    values[py::cast<std::string>(key)] = value_text(value);
+    const std::string name = py::cast<std::string>(key);
+    try {
+      values[name] = value_text(value);
+    } catch (const py::error_already_set&) {
+      // e.g. a numpy array of two values, whose __float__ raises: name the key (issue 19).
+      throw InvalidParameter(name, "a " + brief_text(py::str(value.attr("__class__").attr("__name__"))) +
+                                       " is not a number or a name");
+    }
   }
   return values;
 }
@@ -107,6 +114,13 @@ py::dict snapshot_dict(const Snapshot& s) {
   return d;
 }
 
+/// A time as a message shows it (6 significant digits).
+std::string brief_time(double t) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.6g", t);
+  return text;
+}
+
 /// A run's step allowance from Python: a whole number >= 1, or inf (the default) for no limit.
 double checked_max_steps(double max_steps) {
   if (!(max_steps >= 1.0 && (max_steps == std::floor(max_steps) || std::isinf(max_steps))))
@@ -124,13 +138,29 @@ class StepBudgetExceeded : public std::runtime_error {
 /// at the first terminal event, whose row has the event's time. Columns of equal length: the
 /// state's fields, "phase" and "events" (simulate's phase and event columns, numpy arrays of str);
 /// "event" (one str) is the terminal event or "".
-py::dict run_trajectory(Simulator& simulator, const py::array_t<double, py::array::c_style | py::array::forcecast>& times,
-                        double max_steps) {
+/// A column of numbers from Python (a list, an array), or ValueError naming it (`what`).
+py::array_t<double, py::array::c_style | py::array::forcecast> numbers(const py::handle& values, const std::string& what) {
+  py::array_t<double, py::array::c_style | py::array::forcecast> array;
+  try {
+    array = py::array_t<double, py::array::c_style | py::array::forcecast>(py::reinterpret_borrow<py::object>(values));
+  } catch (const py::error_already_set& e) {
+    throw py::value_error(what + ": must be numbers (" + brief_text(e.what(), 80) + ")");
+  }
+  if (array.ndim() != 1)
+    throw py::value_error(what + ": must be one-dimensional, got " + std::to_string(array.ndim()) + " dimensions");
+  return array;
+}
+
+py::dict run_trajectory(Simulator& simulator, const py::object& times_given, double max_steps) {
   checked_max_steps(max_steps);
+  const auto times = numbers(times_given, "times");
   const auto t = times.unchecked<1>();
   const py::ssize_t n = t.shape(0);
   for (py::ssize_t i = 1; i < n; ++i)
     if (!(t(i) > t(i - 1))) throw py::value_error("times must be increasing");
+  if (n > 0 && std::isfinite(t(n - 1)) && t(n - 1) > kMaxSimulatedTime)
+    throw py::value_error("times: at most 1e9 s (32 years; beyond it the state loses its meaning), got " +
+                          brief_time(t(n - 1)));
   // A row is the state at its time: a time the run has passed has no state to show.
   if (n > 0 && !(t(0) >= simulator.time()))
     throw py::value_error("times must start at or after the simulator's time (" + exact_text(simulator.time()) + " s)");
@@ -269,11 +299,11 @@ py::dict run_cases(const py::dict& base, const py::dict& columns, const CaseSett
   py::ssize_t n = -1;
   for (const auto& [key, values] : columns) {
     keys.push_back(py::cast<std::string>(key));
-    arrays.emplace_back(py::reinterpret_borrow<py::object>(values));
-    if (arrays.back().ndim() != 1) throw py::value_error("column '" + keys.back() + "' is not one-dimensional");
+    arrays.push_back(numbers(values, brief_text(keys.back())));
     if (n >= 0 && arrays.back().shape(0) != n) throw py::value_error("columns differ in length");
     n = arrays.back().shape(0);
   }
+  if (n == 0) throw py::value_error(brief_text(keys.front()) + ": no values (a column needs at least one case)");
   if (n < 0) n = 1;  // no column: the base case alone
   const std::size_t count = static_cast<std::size_t>(n);
   std::vector<const double*> data;
@@ -368,6 +398,14 @@ PYBIND11_MODULE(_core, m) {
           "advance_to",
           [](Simulator& s, double t, double max_steps) {
             checked_max_steps(max_steps);
+            // Time only moves forward: an earlier t did nothing and said nothing (issue 19). (A
+            // non-finite t: the core refuses it.)
+            if (std::isfinite(t) && t > kMaxSimulatedTime)
+              throw py::value_error("advance_to: t must be at most 1e9 s (32 years; beyond it the state loses its "
+                                    "meaning), got " + brief_time(t));
+            if (t < s.time())
+              throw py::value_error("advance_to: t = " + brief_time(t) + " s is before the simulator's time " +
+                                    brief_time(s.time()) + " s; it only moves forward (reset() starts again)");
             Event event;
             {
               py::gil_scoped_release release;

@@ -9,7 +9,8 @@
 // unrelated to the input (e.g. the output cannot be written), 2 bad input (options, YAML,
 // keys, values), 3 the run needs more integration steps than --max-steps allows (the rows up to
 // there are written to stdout or a stream, a file output is not created). On exit code 2 nothing is written; a file output appears only complete; a FIFO
-// or character device given as --output is written to, never replaced.
+// or character device given as --output is written to, never replaced; a signal that ends the
+// run removes the temporary file (issue 19).
 #include <fcntl.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -85,6 +86,14 @@ std::string csv_header() {
   return header + kPhaseColumn + "," + kEventColumn;
 }
 
+/// A path as a message shows it: whole up to 160 characters, else its start and end.
+std::string shown(const std::string& path) {
+  std::string text = path.size() <= 160 ? path : path.substr(0, 40) + "..." + path.substr(path.size() - 117);
+  for (char& c : text)
+    if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) c = '?';  // one line
+  return text;
+}
+
 /// Bad input: reported on stderr with exit code 2 before anything is written.
 class UsageError : public std::runtime_error {
  public:
@@ -117,13 +126,15 @@ void print_help(std::ostream& out) {
          "Options:\n"
          "  --config FILE.yaml   scene file (required), e.g. config/fixed_tip.yaml\n"
          "  --set key=value      overrides one key of the scene file (repeatable; the last wins)\n"
-         "  --duration SECONDS   simulated time to run, > 0 (default 10)\n"
+         "  --duration SECONDS   simulated time to run, > 0 and at most 1e9 (default 10)\n"
          "  --output-rate HZ     output rows per simulated second, > 0 (default 100)\n"
          "  --output FILE.csv    output file (default and '-': stdout). A new or regular file is\n"
          "                       written to a temporary file beside it and renamed, so it appears\n"
          "                       only when complete; a FIFO or character device (also through a\n"
          "                       symbolic link) is written to directly, never replaced; a\n"
-         "                       directory or any other kind of file is refused\n"
+         "                       directory or any other kind of file is refused. An existing\n"
+         "                       file keeps its mode and its hard links; a read-only one and\n"
+         "                       the --config file are refused\n"
          "  --max-steps N        integration steps the run may take, a whole number >= 1\n"
          "                       (default 1e8, ~3 min of CPU); a run that needs more stops\n"
          "                       with exit code 3 rather than computing for hours\n"
@@ -133,6 +144,9 @@ void print_help(std::ostream& out) {
          "Scene file keys (the node's private parameters). Nested YAML maps flatten with '/':\n"
          "  initial: {tilt: 0.3}  is the key  initial/tilt. Required keys must be in the file\n"
          "(or given with --set); the others default as shown. Unknown keys are errors.\n"
+         "A scene file is a regular file of at most 1 MiB without anchors, aliases or tags;\n"
+         "its numbers are unquoted, in forms YAML 1.1 (rosparam) and 1.2 read alike: 10,\n"
+         "0.5, 4.0e-5 (not 010, 1e5 or 5e-5; doc/simulate.md, \"What a scene file may be\").\n"
          "\n";
   std::size_t key_width = 3, unit_width = 4, default_width = 7;
   for (const ParameterSpec& spec : parameter_specs()) {
@@ -223,7 +237,7 @@ double parse_option_number(const std::string& option, const std::string& text) {
     throw UsageError(e.what());
   }
   if (!std::isfinite(value) || !(value > 0.0))
-    throw UsageError(option + ": must be a finite number > 0, got '" + text + "'");
+    throw UsageError(option + ": must be a finite number > 0, got '" + brief_text(text) + "'");
   return value;
 }
 
@@ -241,7 +255,8 @@ Options parse_options(int argc, char** argv) {
     std::string name = argv[i];
     std::string value;
     bool has_value = false;
-    if (name.rfind("--", 0) != 0) throw UsageError("unexpected argument '" + name + "' (options start with --)");
+    if (name.rfind("--", 0) != 0)
+      throw UsageError("unexpected argument '" + brief_text(name) + "' (options start with --)");
     const std::size_t equals = name.find('=');
     if (equals != std::string::npos) {
       value = name.substr(equals + 1);
@@ -250,7 +265,7 @@ Options parse_options(int argc, char** argv) {
     }
     if (name != "--config" && name != "--set" && name != "--duration" && name != "--output-rate" &&
         name != "--output" && name != "--max-steps")
-      throw UsageError("unknown option '" + name + "'");
+      throw UsageError("unknown option '" + brief_text(name) + "'");
     if (!has_value) {
       if (i + 1 >= argc) throw UsageError(name + ": missing value");
       value = argv[++i];
@@ -266,11 +281,15 @@ Options parse_options(int argc, char** argv) {
     } else if (name == "--set") {
       const std::size_t split = value.find('=');
       if (split == std::string::npos || split == 0)
-        throw UsageError("--set: expected key=value, got '" + value + "'");
+        throw UsageError("--set: expected key=value, got '" + brief_text(value) + "'");
       options.overrides.emplace_back(value.substr(0, split), value.substr(split + 1));
     } else if (name == "--duration") {
       once(seen_duration);
       options.duration = parse_option_number(name, value);
+      // --duration 1e20 --output-rate 1e-20 ran exact to NaN rows, exit 0 (kMaxSimulatedTime).
+      if (!(options.duration <= kMaxSimulatedTime))
+        throw UsageError("--duration: must be at most 1e9 s (32 years; beyond it the state loses its meaning), got '" +
+                         brief_text(value) + "'");
     } else if (name == "--output-rate") {
       once(seen_rate);
       options.output_rate = parse_option_number(name, value);
@@ -278,7 +297,7 @@ Options parse_options(int argc, char** argv) {
       once(seen_max_steps);
       options.max_steps = parse_option_number(name, value);
       if (!(options.max_steps == std::floor(options.max_steps) && options.max_steps <= 1e15))
-        throw UsageError("--max-steps: must be a whole number in [1, 1e15], got '" + value + "'");
+        throw UsageError("--max-steps: must be a whole number in [1, 1e15], got '" + brief_text(value) + "'");
     } else {  // --output
       once(seen_output);
       if (value.empty()) throw UsageError("--output: empty file name");
@@ -300,16 +319,16 @@ SceneConfig read_scene(const Options& options) {
     throw UsageError(std::string("--config: ") + e.what());
   }
   ParameterMap origin;
-  for (const auto& [key, value] : values) origin[key] = "in " + options.config_path;
+  for (const auto& [key, value] : values) origin[key] = "in " + shown(options.config_path);
   for (const auto& [key, value] : options.overrides) {
     values[key] = value;
-    origin[key] = "from --set " + key + "=" + value;
+    origin[brief_text(key)] = "from --set " + brief_text(key + "=" + value);  // as InvalidParameter names it
   }
   try {
     return parse_scene_config(values, /*require_all=*/true);
   } catch (const InvalidParameter& e) {
     const auto it = origin.find(e.parameter());
-    throw UsageError(std::string(e.what()) + " (" + (it != origin.end() ? it->second : "in " + options.config_path) +
+    throw UsageError(std::string(e.what()) + " (" + (it != origin.end() ? it->second : "in " + shown(options.config_path)) +
                      ")");
   }
 }
@@ -364,7 +383,7 @@ OutputTarget output_target(const std::string& path) {
   if (path.empty() || path == "-") return target;
   struct stat st {};
   if (lstat(path.c_str(), &st) != 0) {
-    if (errno != ENOENT) throw UsageError("--output: cannot inspect '" + path + "': " + std::strerror(errno));
+    if (errno != ENOENT) throw UsageError("--output: cannot inspect '" + shown(path) + "': " + std::strerror(errno));
     target.kind = OutputTarget::Kind::kReplaceFile;  // a new file (a missing directory fails later, exit 1)
     target.path = path;
     return target;
@@ -374,7 +393,7 @@ OutputTarget output_target(const std::string& path) {
     // Replace or stream into what the link points to; renaming onto the link would replace it.
     char* resolved = realpath(path.c_str(), nullptr);
     if (resolved == nullptr)
-      throw UsageError("--output: '" + path + "' is a symbolic link that does not resolve: " + std::strerror(errno));
+      throw UsageError("--output: '" + shown(path) + "' is a symbolic link that does not resolve: " + std::strerror(errno));
     target.path = resolved;
     std::free(resolved);
     if (stat(target.path.c_str(), &st) != 0)
@@ -385,9 +404,9 @@ OutputTarget output_target(const std::string& path) {
   } else if (S_ISFIFO(st.st_mode) || S_ISCHR(st.st_mode)) {
     target.kind = OutputTarget::Kind::kStream;
   } else if (S_ISDIR(st.st_mode)) {
-    throw UsageError("--output: '" + path + "' is a directory; give a file name");
+    throw UsageError("--output: '" + shown(path) + "' is a directory; give a file name");
   } else {
-    throw UsageError("--output: '" + path + "' is neither a regular file, a FIFO nor a character device");
+    throw UsageError("--output: '" + shown(path) + "' is neither a regular file, a FIFO nor a character device");
   }
   return target;
 }
@@ -407,11 +426,11 @@ class StreamOutput {
  public:
   explicit StreamOutput(const std::string& path) : path_(path) {
     const int fd = open(path.c_str(), O_WRONLY | O_NOCTTY | O_CLOEXEC);
-    if (fd < 0) throw std::runtime_error("--output: cannot open '" + path + "': " + std::strerror(errno));
+    if (fd < 0) throw std::runtime_error("--output: cannot open '" + shown(path) + "': " + std::strerror(errno));
     file_ = fdopen(fd, "w");
     if (file_ == nullptr) {
       close(fd);
-      throw std::runtime_error("cannot open '" + path + "': " + std::strerror(errno));
+      throw std::runtime_error("cannot open '" + shown(path) + "': " + std::strerror(errno));
     }
   }
   ~StreamOutput() {
@@ -428,15 +447,27 @@ class StreamOutput {
 };
 
 /// Writes through a temporary file in the destination's directory and renames it into
-/// place, so readers never see a partial file and a failed run leaves none.
+/// place, so readers never see a partial file and a failed run leaves none. An existing target
+/// keeps what the user set on it:
+///   - one you may not write (access(W_OK): a read-only file, for a user other than root) is
+///     refused before the run, and left as it is;
+///   - its permission bits (and owner and group where the user may set them) pass to the new file;
+///   - a file with other hard links is rewritten in place once the output is complete, so every
+///     name shows the new output (a rename would give this name a new file and leave the others
+///     the old one). That copy is not atomic: a reader during it sees a partial file, and if it
+///     fails the complete output stays in the temporary file, which the message names.
 class AtomicOutputFile {
  public:
   explicit AtomicOutputFile(const std::string& path) : path_(path), temporary_(path + ".tmp.XXXXXX") {
     if (temporary_.size() >= sizeof(g_temporary_path))
-      throw std::runtime_error("--output: path too long: '" + path + "'");
+      throw std::runtime_error("--output: path too long: '" + shown(path) + "'");
+    struct stat st {};
+    if (lstat(path.c_str(), &st) == 0 && S_ISREG(st.st_mode) && access(path.c_str(), W_OK) != 0)
+      throw std::runtime_error("--output: cannot write '" + shown(path) + "': " + std::strerror(errno) +
+                               " (it is left as it is)");
     const int fd = mkstemp(temporary_.data());
     if (fd < 0)
-      throw std::runtime_error("--output: cannot create a file beside '" + path + "': " + std::strerror(errno));
+      throw std::runtime_error("--output: cannot create a file beside '" + shown(path) + "': " + std::strerror(errno));
     std::strcpy(g_temporary_path, temporary_.c_str());
     // mkstemp makes the file 0600; give it the permissions an ordinary new file would get.
     const mode_t mask = umask(0);
@@ -464,15 +495,62 @@ class AtomicOutputFile {
     // The destination may have changed kind since output_target() looked: rename only onto a
     // regular file or a free name.
     struct stat st {};
-    if (lstat(path_.c_str(), &st) == 0 && !S_ISREG(st.st_mode))
-      throw std::runtime_error("'" + path_ + "' is no longer a regular file; the output is left in '" + temporary_ + "'");
+    const bool exists = lstat(path_.c_str(), &st) == 0;
+    if (exists && !S_ISREG(st.st_mode))
+      throw std::runtime_error("'" + shown(path_) + "' is no longer a regular file; the output is left in '" +
+                               temporary_ + "'");
+    if (exists && st.st_nlink > 1) {
+      write_in_place();
+      return;
+    }
+    if (exists) {
+      // The file's permission bits, not the umask's; its owner and group where allowed (root).
+      chmod(temporary_.c_str(), st.st_mode & 0777);
+      if (chown(temporary_.c_str(), st.st_uid, st.st_gid) != 0) {
+        // Not allowed to give it this owner or group: the new file is the user's, as any new file.
+      }
+    }
     if (std::rename(temporary_.c_str(), path_.c_str()) != 0)
-      throw std::runtime_error("cannot rename '" + temporary_ + "' to '" + path_ + "': " + std::strerror(errno));
+      throw std::runtime_error("cannot rename '" + temporary_ + "' to '" + shown(path_) + "': " + std::strerror(errno));
     committed_ = true;
     g_temporary_path[0] = '\0';
   }
 
  private:
+  /// Copies the complete temporary file into the target (keeping its inode, so its other hard
+  /// links), then removes the temporary one; on failure keeps it and says where the output is.
+  void write_in_place() {
+    const int in = open(temporary_.c_str(), O_RDONLY | O_CLOEXEC);
+    const int out = in < 0 ? -1 : open(path_.c_str(), O_WRONLY | O_TRUNC | O_NOCTTY | O_CLOEXEC);
+    bool ok = in >= 0 && out >= 0;
+    char buffer[1 << 16];
+    while (ok) {
+      const ssize_t n = read(in, buffer, sizeof buffer);
+      if (n < 0 && errno == EINTR) continue;
+      if (n <= 0) {
+        ok = n == 0;
+        break;
+      }
+      for (ssize_t done = 0; ok && done < n;) {
+        const ssize_t m = write(out, buffer + done, static_cast<std::size_t>(n - done));
+        if (m < 0 && errno == EINTR) continue;
+        if (m <= 0) ok = false;
+        else done += m;
+      }
+    }
+    const int error = errno;
+    if (out >= 0 && close(out) != 0) ok = false;
+    if (in >= 0) close(in);
+    if (!ok) {
+      committed_ = true;  // keep the temporary file: it holds the only complete output
+      g_temporary_path[0] = '\0';
+      throw std::runtime_error("cannot write '" + shown(path_) + "' in place (it has other hard links): " +
+                               std::strerror(error) + "; the complete output is in '" + temporary_ + "'");
+    }
+    committed_ = true;
+    discard();
+  }
+
   void discard() {
     unlink(temporary_.c_str());
     g_temporary_path[0] = '\0';
@@ -483,6 +561,23 @@ class AtomicOutputFile {
   std::FILE* file_ = nullptr;
   bool committed_ = false;
 };
+
+/// Every signal whose default action ends the process: each removes the temporary output file
+/// first (SIGKILL and SIGSTOP cannot be caught). Before, SIGUSR1, SIGALRM or SIGPIPE left it.
+void remove_temporary_file_on_signals() {
+  for (int signal_number : {SIGHUP, SIGINT, SIGQUIT, SIGTERM, SIGUSR1, SIGUSR2, SIGALRM, SIGPIPE, SIGVTALRM, SIGPROF,
+                            SIGXCPU, SIGXFSZ, SIGABRT, SIGSEGV, SIGBUS, SIGFPE, SIGILL, SIGTRAP, SIGSYS, SIGIO,
+                            SIGPWR, SIGSTKFLT})
+    std::signal(signal_number, remove_temporary_and_exit);
+  for (int signal_number = SIGRTMIN; signal_number <= SIGRTMAX; ++signal_number)
+    std::signal(signal_number, remove_temporary_and_exit);
+}
+
+/// Whether `a` and `b` name the same file (the same inode), e.g. --output and --config.
+bool same_file(const std::string& a, const std::string& b) {
+  struct stat sa {}, sb {};
+  return stat(a.c_str(), &sa) == 0 && stat(b.c_str(), &sb) == 0 && sa.st_dev == sb.st_dev && sa.st_ino == sb.st_ino;
+}
 
 int main_with_exit_code(int argc, char** argv) {
   Options options;
@@ -496,6 +591,9 @@ int main_with_exit_code(int argc, char** argv) {
     }
     simulator = make_simulator(read_scene(options));
     output = output_target(options.output_path);
+    if (output.kind != OutputTarget::Kind::kStdout && same_file(output.path, options.config_path))
+      throw UsageError("--output: '" + shown(options.output_path) + "' is the scene file given to --config; the "
+                       "output would overwrite it: give another file");
   } catch (const UsageError& e) {
     std::cerr << "simulate: error: " << e.what() << "\nTry 'simulate --help' for the options and keys.\n";
     return kExitBadInput;
@@ -515,7 +613,7 @@ int main_with_exit_code(int argc, char** argv) {
       run(*simulator, times, options.max_steps, stream.stream());
       stream.commit();
     } else {
-      for (int signal_number : {SIGINT, SIGTERM, SIGHUP}) std::signal(signal_number, remove_temporary_and_exit);
+      remove_temporary_file_on_signals();
       AtomicOutputFile file(output.path);
       run(*simulator, times, options.max_steps, file.stream());
       file.commit();

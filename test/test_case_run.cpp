@@ -146,14 +146,23 @@ TEST(RunCase, StopsAtItsStepBudget) {
 
 TEST(RunCase, RefusesBadSettingsNamingThem) {
   const SceneConfig c = toy(SceneType::kFixedTip, 0.3, 150.0, IntegratorType::kAuto);
+  // Issue 19: a duration of 1e300 s at the default rate is the duration's fault (it blamed
+  // sample_rate), and a message shows 1e+300, not std::to_string's 301 digits.
   for (auto [settings, key] : {std::pair{CaseSettings{-1.0, 1e3, 1e8}, "duration"},
                                std::pair{CaseSettings{10.0, 0.0, 1e8}, "sample_rate"},
-                               std::pair{CaseSettings{10.0, 1e3, 0.5}, "max_steps"}}) {
+                               std::pair{CaseSettings{10.0, 1e3, 0.5}, "max_steps"},
+                               std::pair{CaseSettings{1e300, 1e3, 1e8}, "duration"},
+                               std::pair{CaseSettings{1e7, 1e3, 1e8}, "duration"},
+                               std::pair{CaseSettings{2e9, 1e-3, 1e8}, "duration"},  // beyond 1e9 s
+                               std::pair{CaseSettings{10.0, 1e300, 1e8}, "sample_rate"},
+                               std::pair{CaseSettings{-1e300, 1e3, 1e8}, "duration"},
+                               std::pair{CaseSettings{10.0, 1e3, 1e300}, "max_steps"}}) {
     try {
       run_case(c, settings);
       ADD_FAILURE() << key << " accepted";
     } catch (const InvalidParameter& e) {
-      EXPECT_EQ(e.parameter(), key);
+      EXPECT_EQ(e.parameter(), key) << e.what();
+      EXPECT_LT(std::string(e.what()).size(), 120u) << e.what();
     }
   }
 }

@@ -2,14 +2,18 @@
 // tested on the built executable: CSV layout and output instants, the physics of the rows it
 // writes, and exit code 2 with nothing written for every kind of bad input.
 #include <fcntl.h>
+#include <grp.h>
 #include <gtest/gtest.h>
+#include <signal.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <chrono>
 #include <cmath>
 #include <cstdlib>
 #include <dirent.h>
+#include <thread>
 #include <fstream>
 #include <sstream>
 #include <string>
@@ -31,6 +35,7 @@ const std::string kHeader =
     "t,qw,qx,qy,qz,gx,gy,gz,px,py,pz,normal_force,contact_force_x,contact_force_y,energy,phase,event";
 const std::string kIntegratorComment = "# integrator: ";
 const std::string kFixedTipYaml = std::string(SPINNING_TOP_SOURCE_DIR) + "/config/fixed_tip.yaml";
+const std::string kViscousYaml = std::string(SPINNING_TOP_SOURCE_DIR) + "/config/viscous.yaml";
 
 // The toy top of config/fixed_tip.yaml (checked against the file in FirstRowIsTheInitialState).
 constexpr double kMass = 0.1, kA = 4e-5, kC = 6e-5, kH = 0.02, kG = 9.80665, kTilt = 0.3, kSpin = 150.0;
@@ -80,18 +85,28 @@ class SimulateTest : public ::testing::Test {
   }
   void TearDown() override { std::system(("rm -rf '" + dir_ + "'").c_str()); }
 
-  /// Runs simulate with these arguments (no shell), capturing stdout and stderr.
-  Result simulate(const std::vector<std::string>& args) {
+  /// Starts simulate with these arguments (no shell), its stdout and stderr to files in dir_;
+  /// as the user `uid` if it is not -1 (the test then runs as root).
+  pid_t start(const std::vector<std::string>& args, uid_t uid = static_cast<uid_t>(-1)) {
     const std::string out_path = dir_ + "/stdout", err_path = dir_ + "/stderr";
     const pid_t pid = fork();
     if (pid == 0) {
       if (!freopen(out_path.c_str(), "w", stdout) || !freopen(err_path.c_str(), "w", stderr)) _exit(127);
+      if (uid != static_cast<uid_t>(-1) && (setgroups(0, nullptr) != 0 || setgid(uid) != 0 || setuid(uid) != 0))
+        _exit(126);
       std::vector<char*> argv{const_cast<char*>(SIMULATE_EXECUTABLE)};
       for (const std::string& arg : args) argv.push_back(const_cast<char*>(arg.c_str()));
       argv.push_back(nullptr);
       execv(SIMULATE_EXECUTABLE, argv.data());
       _exit(127);
     }
+    return pid;
+  }
+
+  /// Runs simulate with these arguments (no shell), capturing stdout and stderr.
+  Result simulate(const std::vector<std::string>& args, uid_t uid = static_cast<uid_t>(-1)) {
+    const std::string out_path = dir_ + "/stdout", err_path = dir_ + "/stderr";
+    const pid_t pid = start(args, uid);
     int status = 0;
     waitpid(pid, &status, 0);
     Result result;
@@ -268,6 +283,93 @@ TEST_F(SimulateTest, ALinkToARegularFileReplacesTheFileAndKeepsTheLink) {
   ASSERT_EQ(lstat(link.c_str(), &st), 0);
   EXPECT_TRUE(S_ISLNK(st.st_mode)) << "the link was replaced by a file";
   EXPECT_EQ(read_file(file), simulate({"--config", kFixedTipYaml, "--duration", "0.5"}).out);
+}
+
+// Issue 19, item 12: every signal that ends the run removes the temporary file. Before, only
+// SIGINT, SIGTERM and SIGHUP did: SIGUSR1, SIGALRM and SIGPIPE left run.csv.tmp.XXXXXX behind.
+TEST_F(SimulateTest, ASignalThatEndsTheRunLeavesNoTemporaryFile) {
+  const std::string csv = output_dir_ + "/run.csv";
+  for (const int signal_number : {SIGUSR1, SIGALRM, SIGPIPE, SIGUSR2, SIGTERM}) {
+    // rk4 at 1e-6 s for 1e4 s: far longer than the test waits.
+    const pid_t pid = start({"--config", kFixedTipYaml, "--set", "integrator=rk4", "--set", "step=1e-6",
+                             "--duration", "1e4", "--output-rate", "0.01", "--output", csv});
+    // Wait until the temporary file exists (a guard of 30 s, not a measure).
+    for (int i = 0; i < 3000 && directory_entries(output_dir_).empty(); ++i)
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    ASSERT_EQ(directory_entries(output_dir_).size(), 1u) << "no temporary file appeared";
+    kill(pid, signal_number);
+    int status = 0;
+    waitpid(pid, &status, 0);
+    EXPECT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == signal_number) << "signal " << signal_number;
+    for (const std::string& left : directory_entries(output_dir_)) {
+      ADD_FAILURE() << "signal " << signal_number << " left " << left;
+      unlink((output_dir_ + "/" + left).c_str());  // judge the next signal alone
+    }
+  }
+}
+
+// Issue 19, item 12: a file the user may not write is not replaced (before, the rename replaced
+// it whenever the directory was writable). Root may write any file, so as root the run is made as
+// the user nobody (uid 65534) on a root-owned read-only file.
+TEST_F(SimulateTest, AReadOnlyOutputIsLeftAsItIs) {
+  const bool root = geteuid() == 0;
+  const uid_t user = root ? 65534 : static_cast<uid_t>(-1);
+  ASSERT_EQ(chmod(dir_.c_str(), 0755), 0);
+  ASSERT_EQ(chmod(output_dir_.c_str(), 0777), 0);  // writable: the rename would succeed
+  const std::string scene = write_yaml("scene.yaml", read_file(kFixedTipYaml));
+  ASSERT_EQ(chmod(scene.c_str(), 0644), 0);
+  const std::string csv = output_dir_ + "/run.csv";
+  std::ofstream(csv) << "keep\n";
+  ASSERT_EQ(chmod(csv.c_str(), 0444), 0);
+  const Result r = simulate({"--config", scene, "--duration", "0.1", "--output", csv}, user);
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_NE(r.err.find("cannot write '" + csv + "'"), std::string::npos) << r.err;
+  EXPECT_EQ(read_file(csv), "keep\n");
+  EXPECT_EQ(directory_entries(output_dir_), std::vector<std::string>{"run.csv"});
+}
+
+// Issue 19, item 12: --output naming the scene file (the same path, a hard link or a symbolic
+// link to it) is refused before anything is written; before, the CSV replaced the scene file.
+TEST_F(SimulateTest, AnOutputThatIsTheSceneFileIsRefused) {
+  const std::string text = read_file(kFixedTipYaml);
+  const std::string scene = write_yaml("scene.yaml", text);
+  const std::string hard = output_dir_ + "/hard.yaml", soft = output_dir_ + "/soft.yaml";
+  ASSERT_EQ(link(scene.c_str(), hard.c_str()), 0);
+  ASSERT_EQ(symlink(scene.c_str(), soft.c_str()), 0);
+  for (const std::string& output : {scene, hard, soft}) {
+    const Result r = simulate({"--config", scene, "--duration", "0.1", "--output", output});
+    EXPECT_EQ(r.exit_code, 2) << output << ": " << r.err;
+    EXPECT_NE(r.err.find("is the scene file given to --config"), std::string::npos) << r.err;
+    EXPECT_EQ(read_file(scene), text) << output;
+  }
+}
+
+// Issue 19, item 12: an existing output keeps its permission bits and its hard links (a file
+// with other links is rewritten in place once the output is complete). Before, the rename gave
+// it a new inode with mode 0644 (the umask's): run.csv lost its 0640 and other.csv kept the old
+// rows.
+TEST_F(SimulateTest, AnExistingOutputKeepsItsModeAndItsHardLinks) {
+  const std::string csv = output_dir_ + "/run.csv", other = output_dir_ + "/other.csv";
+  const std::string expected = simulate({"--config", kFixedTipYaml, "--duration", "0.1"}).out;
+  std::ofstream(csv) << "previous run\n";
+  ASSERT_EQ(chmod(csv.c_str(), 0640), 0);
+  Result r = simulate({"--config", kFixedTipYaml, "--duration", "0.1", "--output", csv});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  struct stat st {};
+  ASSERT_EQ(stat(csv.c_str(), &st), 0);
+  EXPECT_EQ(st.st_mode & 0777, 0640u);
+  EXPECT_EQ(read_file(csv), expected);
+  ASSERT_EQ(link(csv.c_str(), other.c_str()), 0);
+  std::ofstream(csv) << "previous run\n";
+  r = simulate({"--config", kFixedTipYaml, "--duration", "0.1", "--output", csv});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(read_file(other), expected) << "the hard link was broken";
+  struct stat other_st {};
+  ASSERT_EQ(stat(csv.c_str(), &st), 0);
+  ASSERT_EQ(stat(other.c_str(), &other_st), 0);
+  EXPECT_EQ(st.st_ino, other_st.st_ino);
+  EXPECT_EQ(st.st_mode & 0777, 0640u);
+  EXPECT_EQ(directory_entries(output_dir_).size(), 2u);  // no temporary file left
 }
 
 TEST_F(SimulateTest, ADirectoryAsOutputIsRefusedWithCode2AndADashIsStdout) {
@@ -450,6 +552,10 @@ TEST_F(SimulateTest, BadInputExitsWithCode2NamesTheCulpritAndWritesNothing) {
   const std::string not_a_number = write_yaml("nan.yaml", scene + "step: fast\n");
   // A second document would be ignored without a word: its "mass: -1" never checked.
   const std::string two_documents = write_yaml("two_documents.yaml", scene + "---\nmass: -1\n");
+  const std::string quoted = write_yaml("quoted.yaml", scene + "gravity: \"9.8\"\n");
+  const std::string tagged = write_yaml("tagged.yaml", without_mass_text + "mass: !!str 0.1\n");
+  const std::string octal = write_yaml("octal.yaml", scene + "gravity: 010\n");
+  const std::string aliased = write_yaml("aliased.yaml", scene + "gravity: &g 9.8\nfriction: *g\n");
 
   struct Case {
     std::vector<std::string> args;
@@ -490,6 +596,18 @@ TEST_F(SimulateTest, BadInputExitsWithCode2NamesTheCulpritAndWritesNothing) {
       {{"--config", kFixedTipYaml, "--set", "mass"}, "--set"},
       {{"--config", kFixedTipYaml, "--speed", "2"}, "--speed"},
       {{"--config", kFixedTipYaml, "stray"}, "stray"},
+      // Issue 19, through this front end (test_scene_file and test_validation test the core):
+      // /dev/zero ended in std::bad_alloc (exit 134); the others ran (exit 0), 010 with g = 10
+      // where the node's rosparam gives 8, velocity_x = 1e300 with E = inf.
+      {{"--config", "/dev/zero"}, "--config: '/dev/zero' is a character device"},
+      {{"--config", quoted}, "gravity: '9.8' is quoted"},
+      {{"--config", tagged}, "mass: has the tag !!str"},
+      {{"--config", octal}, "gravity: '010' has a leading zero"},
+      {{"--config", aliased}, "anchor"},
+      {{"--config", kViscousYaml, "--set", "initial/velocity_x=1e300"}, "initial/velocity_x"},
+      {{"--config", kFixedTipYaml, "--set", "mass=" + std::string(100000, '9') + "x"}, "(100001 characters)"},
+      // exact ran to NaN rows at t = 1e20 s, exit 0 (found by the attack harness).
+      {{"--config", kFixedTipYaml, "--duration", "1e20", "--output-rate", "1e-20"}, "--duration: must be at most 1e9 s"},
   };
   const std::string csv = output_dir_ + "/run.csv";
   for (const Case& c : cases) {
@@ -503,6 +621,7 @@ TEST_F(SimulateTest, BadInputExitsWithCode2NamesTheCulpritAndWritesNothing) {
                                                         << "': " << r.err;
     EXPECT_EQ(r.out, "") << shown;
     EXPECT_TRUE(directory_entries(output_dir_).empty()) << shown << ": something was written";
+    EXPECT_LT(r.err.size(), 1000u) << shown.substr(0, 200) << ": a long message";
   }
   // Nothing on stdout either when the output would have gone there, and an existing output
   // file is left as it was.

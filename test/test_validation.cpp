@@ -15,6 +15,7 @@
 #include "core_test_support.hpp"
 #include "spinning_top/config.hpp"
 #include "spinning_top/defaults.hpp"
+#include "spinning_top/work_budget.hpp"
 
 namespace spinning_top {
 namespace {
@@ -161,6 +162,74 @@ TEST(InvalidParameters, MotionsFasterThanTheSimulatorResolvesAreRefusedByTheirKe
     fast.initial.spin = 5e5;  // a fast but resolvable top: accepted
     EXPECT_NO_THROW(make_simulator(fast)) << to_string(scene);
   }
+}
+
+// Issue 19, item 6: every key is bounded so that every derived quantity is finite, in the one
+// validation of every front end (simulate, Python's Simulator and run_case, the node's spawn,
+// set_state and live changes all call it). Before, G's initial speed had no bound:
+// initial/velocity_x = 1e300 ran (simulate exit 0) with E = inf; and a body of A = C = 1e300 at a
+// spin of 1e6 rad/s, within the motion bound, had E = inf too.
+TEST(InvalidParameters, EveryKeyIsBoundedSoThatTheEnergyStaysFinite) {
+  for (double v : {1e300, -1e300, 1e100, 2e6}) {
+    expect_refused("initial/velocity_x", [&](SceneConfig& c) { c.initial.velocity_x = v; }, "vx");
+    expect_refused("initial/velocity_y", [&](SceneConfig& c) { c.initial.velocity_y = v; }, "vy");
+  }
+  EXPECT_NO_THROW(make_simulator([] {
+    SceneConfig c = valid_viscous();
+    c.initial.velocity_x = -1e6;  // the bound itself
+    return c;
+  }()));
+  for (double huge : {1e300, 1.1e30}) {
+    expect_refused("mass", [&](SceneConfig& c) { c.top.mass = huge; }, "m huge");
+    expect_refused("inertia_transverse", [&](SceneConfig& c) { c.top.inertia_transverse = c.top.inertia_axial = huge; },
+                   "A, C huge");
+    expect_refused("tip_distance", [&](SceneConfig& c) { c.top.tip_distance = huge; }, "h huge");
+    expect_refused("gravity", [&](SceneConfig& c) { c.top.gravity = huge; }, "g huge");
+    expect_refused("friction", [&](SceneConfig& c) { c.top.friction = huge; }, "k huge");
+    expect_refused("rim_radius", [&](SceneConfig& c) { c.top.rim_radius = huge; }, "b huge");
+    expect_refused("restitution_speed", [&](SceneConfig& c) { c.top.restitution_speed = huge; }, "speed huge");
+    expect_refused("initial/heading", [&](SceneConfig& c) { c.initial.heading = -huge; }, "phi0 huge");
+    expect_refused("initial/spin_angle", [&](SceneConfig& c) { c.initial.spin_angle = huge; }, "psi0 huge");
+  }
+  // They divide: a denormal mass made the friction rate 0 x inf = NaN, refused blaming friction.
+  for (double tiny : {1e-320, 0.9e-30}) {
+    expect_refused("mass", [&](SceneConfig& c) { c.top.mass = tiny; }, "m tiny");
+    expect_refused("inertia_transverse", [&](SceneConfig& c) { c.top.inertia_transverse = c.top.inertia_axial = tiny; },
+                   "A tiny");
+  }
+  // Whatever is accepted at the corners of the bounds has a finite state, energy and forces (at
+  // +-1e100 and 1e-100, m h^2 / A = 1e400 made R = inf / inf = NaN).
+  int accepted = 0;
+  for (int corner = 0; corner < (1 << 9); ++corner) {
+    auto pick = [corner](int bit, double lo, double hi) { return (corner >> bit) & 1 ? hi : lo; };
+    SceneConfig c = valid_viscous();
+    c.top.mass = pick(0, 1e-30, 1e30);
+    c.top.inertia_transverse = c.top.inertia_axial = pick(1, 1e-30, 1e30);
+    c.top.tip_distance = pick(2, 0.0, 1e30);
+    c.top.gravity = pick(3, 0.0, 1e30);
+    c.top.friction = pick(4, 0.0, 1e30);
+    c.initial.velocity_x = pick(5, 0.0, 1e6);
+    c.initial.spin = pick(6, 0.0, 9.9e5);
+    c.initial.tilt = pick(7, 0.3, 1.5);
+    c.initial.precession_rate = pick(8, 0.0, -9.9e5);
+    c.integrator.type = IntegratorType::kAuto;
+    std::unique_ptr<Simulator> sim;
+    try {
+      sim = make_simulator(c);
+    } catch (const InvalidParameter&) {
+      continue;
+    }
+    ++accepted;
+    const Snapshot start = sim->snapshot();
+    sim->advance_to(1e-3, WorkBudget::steps(200));
+    for (const Snapshot& s : {start, sim->snapshot()}) {
+      EXPECT_TRUE(std::isfinite(s.outputs.energy) && std::isfinite(s.outputs.normal_force) &&
+                  s.outputs.contact_force.allFinite() && s.outputs.center_of_mass.allFinite() &&
+                  s.body_rates.allFinite() && std::isfinite(s.outputs.dissipated_energy))
+          << "corner " << corner << ": E = " << s.outputs.energy << ", R = " << s.outputs.normal_force;
+    }
+  }
+  EXPECT_GT(accepted, 10);
 }
 
 TEST(InvalidParameters, UnknownSceneAndIntegratorNames) {
@@ -340,6 +409,38 @@ TEST(InvalidParameters, AnUpdateThatWouldLiftTheTipOffAtOnceIsRefusedAndTheSnaps
     ASSERT_EQ(sim->advance_to(0.2), twin->advance_to(0.2));
     EXPECT_EQ(sim->snapshot().attitude.coeffs(), twin->snapshot().attitude.coeffs()) << to_string(scene);
   }
+}
+
+// Messages show numbers as they were written (shortest text, at most 17 digits), not the 301
+// digits of std::to_string(1e300), and at most the start of a long value (issue 19, item 13).
+TEST(InvalidParameters, MessagesShowShortNumbersAndTheStartOfALongValue) {
+  auto message_of = [](const std::function<void()>& f) -> std::string {
+    try {
+      f();
+    } catch (const InvalidParameter& e) {
+      return e.what();
+    }
+    return "";
+  };
+  const std::string huge = message_of([] {
+    SceneConfig c = valid_viscous();
+    c.top.mass = 1e300;
+    make_simulator(c);
+  });
+  EXPECT_NE(huge.find("got 1e+300"), std::string::npos) << huge;
+  ParameterMap values = scene_file();
+  values["mass"] = std::string(20 << 20, '9') + "x";  // 20 MB
+  const std::string long_value = message_of([&] { parse_scene_config(values, true); });
+  EXPECT_LT(long_value.size(), 200u) << long_value.substr(0, 300);
+  EXPECT_NE(long_value.find("(20971521 characters)"), std::string::npos) << long_value.substr(0, 300);
+  values = scene_file();
+  values["scene"] = std::string(1 << 20, 's');
+  EXPECT_LT(message_of([&] { parse_scene_config(values, true); }).size(), 200u);
+  values = scene_file();
+  values[std::string(1 << 20, 'k')] = "1";  // an unknown key: no near-miss search over it either
+  const std::string unknown = message_of([&] { parse_scene_config(values, true); });
+  EXPECT_LT(unknown.size(), 200u) << unknown.substr(0, 300);
+  EXPECT_NE(unknown.find("unknown key"), std::string::npos) << unknown.substr(0, 300);
 }
 
 }  // namespace

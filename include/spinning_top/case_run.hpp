@@ -10,6 +10,13 @@
 
 namespace spinning_top {
 
+/// The longest simulated time the front ends ask for [s] (simulate --duration, a case's duration,
+/// Python's advance_to and run): 1e9 s, 32 years. There the time's own rounding is 1.2e-7 s (a
+/// phase of 3e-5 rad for the toy top); far beyond it the state stops meaning anything, and
+/// silently: exact gave E = 2e231 at 1e17 s and NaN quaternions at 1e20 s, with no event
+/// (issue 19, found by the attack harness: Simulator.run(np.linspace(0, 1e300, 3))).
+constexpr double kMaxSimulatedTime = 1e9;
+
 /// Instants t_i = i / rate, i = 0..N, N = floor(duration * rate), each a single division (no
 /// accumulated round-off), plus t = duration when that is not one of them. A relative slack of
 /// 1e-9 absorbs decimal round-off: 1.1 s at 100 Hz is 110.00000000000001 intervals in doubles
@@ -59,7 +66,8 @@ struct CaseSettings {
   double max_steps = 1e8;
 };
 
-/// Throws InvalidParameter("duration" | "sample_rate" | "max_steps", why).
+/// Throws InvalidParameter("duration" | "sample_rate" | "max_steps", why): each finite and > 0, the
+/// duration at most kMaxSimulatedTime, at most 1e9 samples, max_steps a whole number in [1, 1e15].
 void validate(const CaseSettings& settings);
 
 /// A case's result. Every number is finite (a case that ends in non_finite reports the last

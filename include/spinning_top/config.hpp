@@ -18,6 +18,7 @@ struct ParameterSpec {
   std::string default_value;
   bool required_in_file;      ///< a scene file (batch simulator) must give it
   std::string description;
+  bool text = false;          ///< a name (scene, integrator, after_lift_off), not a number
 };
 
 /// Every key, in documentation order.
@@ -32,8 +33,14 @@ using ParameterMap = std::map<std::string, std::string>;
 /// defaults apply (the node's behaviour).
 SceneConfig parse_scene_config(const ParameterMap& values, bool require_all);
 
-/// Parses a whole decimal number in text (no trailing characters); throws InvalidParameter.
+/// Parses a whole decimal number in text (no trailing characters); throws InvalidParameter
+/// (whose message shows at most the text's first 40 characters).
 double parse_number(const std::string& key, const std::string& text);
+
+/// `text` as a message shows a value someone gave: whole up to `limit` characters, else its first
+/// limit / 2 and its length (a 20 MB value is not echoed, a 300-digit number shows 20 digits);
+/// control characters escaped (\x0a), so that a message is one line.
+std::string brief_text(const std::string& text, std::size_t limit = 40);
 
 /// The known name nearest to `name` if it is a near miss (at most 2 edits, Levenshtein, and
 /// fewer than half its letters), else "": for "did you mean" hints on unknown keys.

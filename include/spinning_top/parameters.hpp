@@ -59,12 +59,14 @@ class InvalidParameter : public std::invalid_argument {
   std::string parameter_;
 };
 
-/// Throws InvalidParameter unless: all finite; m, A, C > 0; h, g, k, a, b >= 0; C <= 2A; b > 0 only
-/// with a > 0; e in [0, 1); restitution_speed >= 0.
+/// Throws InvalidParameter unless: all finite and within +-1e30 (so that the model's products and
+/// quotients of keys, m h^2 / A, m g h, m v^2, stay finite); m, A, C >= 1e-30 (they divide); h, g, k, a, b >= 0;
+/// C <= 2A; b > 0 only with a > 0; e in [0, 1); restitution_speed >= 0.
 void validate(const TopParameters& parameters);
 
-/// Throws InvalidParameter unless all values are finite and the axis starts above the
-/// floor (|tilt| < pi/2).
+/// Throws InvalidParameter unless all values are finite, the angles within +-1e30, G's speeds
+/// within +-1e6 m/s (the rates' motion bound, 1e6 rad/s, on a 1 m lever: validate(SceneConfig)
+/// bounds the rates) and the axis starts above the floor (|tilt| < pi/2).
 void validate(const InitialConditions& initial);
 
 }  // namespace spinning_top
