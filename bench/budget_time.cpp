@@ -20,7 +20,9 @@
 #include <string>
 #include <vector>
 
+#include "spinning_top/integrators/exact_stepper.hpp"
 #include "spinning_top/scenes/fixed_tip.hpp"
+#include "spinning_top/scenes/frictionless.hpp"
 #include "spinning_top/scenes/viscous.hpp"
 #include "spinning_top/simulator.hpp"
 
@@ -178,6 +180,32 @@ std::string unit_costs(const Model& model, const char* name) {
   return line;
 }
 
+/// exact's construction (ExactStepper::restart, what a hybrid's landing costs): CPU against the
+/// work it charges (ExactStepper: 300 units and 16 per Fourier term).
+template <class Model>
+std::string exact_build(const char* name, double tilt, double spin) {
+  TopParameters top;
+  InitialConditions initial;
+  initial.tilt = tilt;
+  initial.spin = spin;
+  const Model model(top, initial);
+  double best = 1e300;
+  long work = 0;
+  int terms = 0;
+  for (int round = 0; round < 5; ++round) {
+    ExactStepper<Model> stepper;
+    const double start = thread_cpu_seconds();
+    stepper.restart(model, 0.0, model.initial_state());
+    best = std::min(best, thread_cpu_seconds() - start);
+    work = stepper.work();
+    terms = stepper.solution().terms();
+  }
+  char line[256];
+  std::snprintf(line, sizeof line, "| %s, tilt %g, spin %g | %d | %.1f | %ld | %.4f |\n", name, tilt, spin, terms, 1e6 * best,
+                work, 1e6 * best / static_cast<double>(work));
+  return line;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -264,6 +292,13 @@ int main(int argc, char** argv) {
   initial.velocity_x = 0.05;
   units += unit_costs(Viscous(top, initial), "viscous");
   units += unit_costs(FixedTip(top, initial), "fixed tip");
+  units +=
+      "\nexact's construction (at each landing of a hopping run), against the work it charges:\n\n"
+      "| state | Fourier terms | CPU [us] | work units | CPU per unit [us] |\n|---|---|---|---|---|\n";
+  units += exact_build<FixedTip>("fixed tip", 0.3, 150.0);
+  units += exact_build<FixedTip>("fixed tip", 1e-7, 3.2);
+  units += exact_build<Frictionless>("frictionless", 0.3, 150.0);
+  units += exact_build<Frictionless>("frictionless", 1.6e-7, 3.2);
   std::fputs(units.c_str(), stdout);
 
   std::FILE* out = std::fopen(out_path.c_str(), "w");

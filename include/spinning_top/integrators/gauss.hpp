@@ -41,7 +41,7 @@ class ReducedGauss6 {
 
   /// Work units spent (work_budget.hpp): evaluations of the reduced rate (one per stage of each
   /// fixed-point sweep, one at the start of each collocation) and one for each final correction.
-  /// A step costs 1 + 3 x sweeps + 1: about 31 at 1 ms on the toy top (10 sweeps), a step taken
+  /// A step costs 1 + 3 x sweeps + 1: 29 at 1 ms on the toy top (9 sweeps), a step taken
   /// in two halves twice that and more.
   long work() const { return work_; }
 
