@@ -43,30 +43,26 @@ class HybridSimulator final : public Simulator {
   using Simulator::advance_to;
   Event advance_to(double t, const WorkBudget& budget) override {
     if (!std::isfinite(t)) throw std::invalid_argument("advance_to: the target time must be finite, got " + std::to_string(t));
-    long used = 0;  // steps of this call: the phases' integration steps, and one per transition
-    auto left = [&] {
-      WorkBudget b = budget;
-      b.max_steps = budget.max_steps == std::numeric_limits<long>::max() ? budget.max_steps : budget.max_steps - used;
-      return b;
-    };
+    // Work units of this call (work_budget.hpp): the contact phases' (with their restarts at the
+    // transitions: exact builds its solution again), and one step of the budget per step of a
+    // flight's search and per transition's row (record()).
+    const long start = work_units();
+    auto used = [&] { return work_units() - start; };
     for (;;) {
       if (terminal_ != Event::kNone) return terminal_;
       if (phase_ != Phase::kFlight) {
-        const long before = contact_->steps();
-        const Event event = contact_->advance_to(t, left());
-        used += contact_->steps() - before;
+        const Event event = contact_->advance_to(t, budget.after(used()));
         time_ = contact_->time();
         if (event == Event::kNone) return Event::kNone;  // at t, or out of budget
         if (event != Event::kLiftOff) return end(event);
-        if (used >= budget.max_steps) return Event::kNone;  // the event stays pending in the phase
-        ++used;
+        if (used() >= budget.max_work) return Event::kNone;  // the event stays pending in the phase
         after_floor_event();
         continue;
       }
       if (t <= time_) return Event::kNone;
       // The search for the touch is the flight's work: each of its steps counts against the budget
       // (and the deadline), as an integration step does.
-      const WorkBudget flight_budget = left();
+      const WorkBudget flight_budget = budget.after(used());
       BudgetMeter meter(flight_budget);
       long searched = 0;
       const Flight::Touch touch = flight_.search_until(t, [&] {
@@ -74,7 +70,7 @@ class HybridSimulator final : public Simulator {
         ++searched;
         return true;
       });
-      used += searched;
+      own_work_ += searched * kWorkPerStep;
       finished_steps_ += searched;
       if (touch.out_of_budget) {
         time_ = std::max(time_, flight_.searched_until());
@@ -84,8 +80,7 @@ class HybridSimulator final : public Simulator {
         time_ = t;
         return Event::kNone;
       }
-      if (used >= budget.max_steps) return Event::kNone;
-      ++used;
+      if (used() >= budget.max_work) return Event::kNone;
       touch_down(touch);
     }
   }
@@ -126,6 +121,7 @@ class HybridSimulator final : public Simulator {
     transitions_.clear();
     hops_ = HopSummary();
     finished_steps_ = 0;
+    own_work_ = 0;
     impact_loss_ = 0.0;
     flight_work_ = 0.0;
     same_instant_ = 0;
@@ -154,6 +150,9 @@ class HybridSimulator final : public Simulator {
   std::string integrator_description() const override { return contact_->integrator_description(); }
   IntegratorChoice integrator_choice() const override { return contact_->integrator_choice(); }
   long steps() const override { return finished_steps_ + (phase_ == Phase::kFlight ? 0 : contact_->steps()); }
+  /// The contact phases' work (across their restarts), and one step of the budget per step of a
+  /// flight's search and per transition.
+  long work() const override { return work_in_steps(work_units()); }
 
   std::vector<Transition> take_transitions() override {
     std::vector<Transition> taken;
@@ -170,6 +169,8 @@ class HybridSimulator final : public Simulator {
   Phase phase() const override { return phase_; }
 
  private:
+  long work_units() const { return contact_->work_units() + own_work_; }
+
   /// A start that is already an event: R < 0 at release lifts off at once (the snapshot at t = 0
   /// is then the flight's or the skim's, never a contact state with R < 0); any other ends the run.
   void settle_start() {
@@ -223,6 +224,7 @@ class HybridSimulator final : public Simulator {
     if (transitions_.size() >= kMaxPending) transitions_.erase(transitions_.begin(), transitions_.begin() + kMaxPending / 2);
     transitions_.push_back({event, snapshot()});
     ++finished_steps_;
+    own_work_ += kWorkPerStep;
   }
   static constexpr std::size_t kMaxPending = 1 << 14;
   static constexpr int kChatter = 8;
@@ -400,6 +402,7 @@ class HybridSimulator final : public Simulator {
   std::vector<Transition> transitions_;
   HopSummary hops_;
   long finished_steps_ = 0;   ///< the steps of the phases before the current contact phase
+  long own_work_ = 0;         ///< work units of the flights' searches and the transitions
   double impact_loss_ = 0.0;  ///< [J] kinetic energy lost in the landings so far
   double flight_work_ = 0.0;  ///< [J] W at the last lift-off (constant in flight)
 };

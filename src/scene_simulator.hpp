@@ -42,7 +42,12 @@ class ContactPhase : public Simulator {
   virtual const Model& model() const = 0;
   /// Goes on at (t, y) with `model` (the same top; skimming or not): its driver restarts there,
   /// auto choosing again. Throws MethodRefusal where the configured closed form refuses y.
+  /// steps() starts again from 0; work_units() goes on, with the restart's own work (a closed
+  /// form's construction).
   virtual void restart(const Model& model, double t, const State& y) = 0;
+  /// The work since the last reset() in units of the work budget (work_budget.hpp), across
+  /// restarts and updates: work() rounded up to steps.
+  virtual long work_units() const = 0;
 };
 
 template <class Model, class Driver>
@@ -90,6 +95,7 @@ class SceneSimulator final : public ContactPhase<Model> {
     const IntegratorChoice before = integrator_choice();
     driver_.reset(model_, 0.0, model_.initial_state());
     updated_ = false;
+    earlier_work_ = 0;
     return switched(before);
   }
 
@@ -123,6 +129,7 @@ class SceneSimulator final : public ContactPhase<Model> {
                                  " N): the change would lift the tip off at once; refused, the run goes on");
     config_ = next;
     model_ = std::move(model);
+    earlier_work_ += driver_.work();
     driver_ = std::move(driver);
     updated_ = true;
     if (event != Event::kNone) driver_.stop(event);  // a stopped run stays stopped until reset()
@@ -140,6 +147,8 @@ class SceneSimulator final : public ContactPhase<Model> {
       return {config_.integrator.type, config_.integrator.type, false, ""};
   }
   long steps() const override { return driver_.steps(); }
+  long work() const override { return work_in_steps(work_units()); }
+  long work_units() const override { return earlier_work_ + driver_.work(); }
   std::vector<Transition> take_transitions() override { return {}; }  // a contact phase alone has none
   HopSummary hops() const override {
     HopSummary summary;
@@ -151,7 +160,10 @@ class SceneSimulator final : public ContactPhase<Model> {
   const State& state() const override { return driver_.state(); }
   const Model& model() const override { return model_; }
   void restart(const Model& model, double t, const State& y) override {
+    const long spent = driver_.work();
     driver_.reset(model, t, y);  // may throw (MethodRefusal) before anything changes
+    // A restart inside a run costs its work (exact builds its solution again); a reset's does not.
+    earlier_work_ += spent + driver_.restart_work();
     model_ = model;
     updated_ = true;
   }
@@ -167,6 +179,7 @@ class SceneSimulator final : public ContactPhase<Model> {
   Model model_;
   Driver driver_;
   bool updated_ = false;  ///< update() restarted the driver mid-run
+  long earlier_work_ = 0;  ///< work units of the drivers before the last update() or restart()
 };
 
 /// The simulator for the integrator `type` on this scene, or null if the row does not serve it

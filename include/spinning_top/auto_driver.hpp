@@ -75,6 +75,14 @@ class AutoDriver {
   long steps() const {
     return std::visit([](const auto& c) { return c.driver.steps(); }, driver_);
   }
+  /// Work units since the last (re)start (Driver::work()).
+  long work() const {
+    return std::visit([](const auto& c) { return c.driver.work(); }, driver_);
+  }
+  /// The last (re)start's work (Driver::restart_work()).
+  long restart_work() const {
+    return std::visit([](const auto& c) { return c.driver.restart_work(); }, driver_);
+  }
   void stop(Event event) {
     std::visit([&](auto& c) { c.driver.stop(event); }, driver_);
   }

@@ -195,8 +195,14 @@ class Simulator {
   /// the turning points of the nutation and R as a function of e_Zz (no peak between samples can
   /// be missed). nullopt for a time-stepper, and after an update() (the run then had two models).
   virtual std::optional<MotionRange> motion_range() const = 0;
-  /// Accepted integration steps since the last reset (a cost measure; a transition counts one).
+  /// Accepted integration steps since the last reset (a transition counts one).
   virtual long steps() const = 0;
+  /// The work since the last reset in steps of the work budget (work_budget.hpp), what a run's
+  /// allowance counts: WorkBudget::steps_left(max_steps, work()). At least steps(); more where
+  /// steps cost more than a dop853 step (rejected attempts, Newton iterations, Jacobians and
+  /// factorizations, collocation sweeps, dense solves), so that one allowance bounds the CPU
+  /// time of every method within a few times.
+  virtual long work() const = 0;
   /// The transitions passed since the last call (or reset), in time order, each with its state:
   /// what the front ends show as rows or event messages between their requested times. At most
   /// the newest 16384 are kept for a caller that does not take them.

@@ -16,6 +16,7 @@
 // the state into the next phase and goes on: see EventHandling below.
 #pragma once
 
+#include <algorithm>
 #include <optional>
 #include <string>
 #include <utility>
@@ -63,8 +64,10 @@ class Driver {
   void reset(const Model& model, double t, const State& y) {
     State start = y;
     const bool finite = StepGuard<Model>::project(start);
+    const long before = stepper_.work();
     if (finite) stepper_.restart(model, t, start);
-    steps_ = rejected_ = 0;
+    restart_work_ = stepper_.work() - before;
+    steps_ = rejected_ = work_ = 0;
     begin(model, t, start, finite);
   }
 
@@ -75,10 +78,14 @@ class Driver {
   Event advance_to(const Model& model, double t_target, const WorkBudget& budget = WorkBudget()) {
     if (event_ != Event::kNone || t_target <= t_out_) return event_;
     BudgetMeter meter(budget);
+    const long start = work();
     for (;;) {
       while (t_ < t_target && pending_ == Event::kNone) {
-        if (!meter.allows_step()) return out_of_budget();
-        if (!take_step(model, t_target)) return event_ = Event::kNonFinite;
+        if (!meter.allows_step(work() - start)) return out_of_budget();
+        const long before = stepper_.work();
+        const bool continued = take_step(model, t_target);
+        work_ += stepper_.work() - before + kStepChecksWork;
+        if (!continued) return event_ = Event::kNonFinite;
       }
       if (pending_ == Event::kNone || t_target < t_) break;
       if (!continue_after(model)) {
@@ -89,7 +96,10 @@ class Driver {
       if (event_ != Event::kNone) return event_;  // the mapped state is itself invalid
     }
     State y;
-    if (!stepper_.answer(model, t_target, y_, y)) return event_ = Event::kNonFinite;
+    const long before = stepper_.work();
+    const bool answered = stepper_.answer(model, t_target, y_, y);
+    work_ += stepper_.work() - before;  // a dense output's stages, a partial collocation step
+    if (!answered) return event_ = Event::kNonFinite;
     // A state interpolated between the steps can break the balance where the steps do not
     // (dopri5 at tolerance 1e-3: 1.4x the allowed drift, found by the fuzz test). The run then
     // stops at the last state it answered.
@@ -106,6 +116,14 @@ class Driver {
   Event event() const { return event_; }
   long steps() const { return steps_; }            ///< accepted steps since reset (a closed form's span: 1)
   long rejected_steps() const { return rejected_; }  ///< rejected attempts since reset
+  /// Work since reset in units of the work budget (work_budget.hpp): what the stepper charged
+  /// (rejected attempts, Newton iterations, dense output and event searches included) and the
+  /// checks after each step, but at least kWorkPerStep per accepted step.
+  long work() const { return std::max(steps_ * kWorkPerStep, work_); }
+  /// The work units of the last reset's start of the stepper (a closed form's construction),
+  /// not in work(): a run charges it where it restarts a phase inside an advance (the hybrid's
+  /// transitions), not for its first start.
+  long restart_work() const { return restart_work_; }
   /// Ends the run with the given event (kept until the next reset).
   void stop(Event event) { event_ = event; }
 
@@ -155,7 +173,9 @@ class Driver {
     // the attitude keeps it there. Projecting twice moves q by an ulp, which can take a state
     // located just inside the model's validity (e_Zz = 2e-16 at a landing) just outside it.
     const bool finite = all_finite(y);
+    const long before = stepper_.work();
     if (finite) stepper_.restart(model, t_, y);
+    work_ += stepper_.work() - before;
     begin(model, t_, y, finite);
     return true;
   }
@@ -240,6 +260,11 @@ class Driver {
   State y_ = State::Zero(), f_ = State::Zero();
   Event pending_ = Event::kNone;
   long steps_ = 0, rejected_ = 0;
+  long work_ = 0;  ///< units charged since reset (work() adds the floor of one budget step per step)
+  long restart_work_ = 0;
+  /// The driver's own work after a step, in units: the event functions, the guard and the
+  /// projection (1), and f at the step's end where the method does not hand it over (1).
+  static constexpr long kStepChecksWork = Stepper::kClosedForm ? 0 : Stepper::kFsal ? 1 : 2;
 };
 
 }  // namespace spinning_top

@@ -13,10 +13,16 @@
 //                         the StepGuard checks (else they are step ends, already checked);
 //   kClosedForm           the step is a closed form: exact, so no guard, and its events come in
 //                         closed form instead of from the EventLocator.
+// And its work (work()): the units of the work budget (work_budget.hpp, about one evaluation of
+// the derivative each) it has spent since it was built (restarts do not reset it), in attempts
+// (accepted or not), in its interpolant (a re-taken step, a dense output), in answers and in
+// restarts (a closed form's construction); the driver charges the difference over each. A method states its work per step as kWorkPerStep,
+// or counts it itself (work(): gauss6's sweeps, radau5's Newton iterations and factorizations).
 #pragma once
 
 #include <optional>
 #include <string>
+#include <type_traits>
 
 #include "spinning_top/hot_path.hpp"
 #include "spinning_top/kinematics.hpp"
@@ -28,6 +34,14 @@ struct ClosedFormRange {
   double one_minus_cos_max_tilt = 0.0;       ///< 1 - e_Zz at the largest tilt
   double least_normal_force_per_mass = 0.0;  ///< least R / m [m/s^2]
 };
+
+namespace stepper_detail {
+/// True if Method counts its own work (a long work() const), else it states kWorkPerStep.
+template <class Method, class = void>
+struct CountsItsWork : std::false_type {};
+template <class Method>
+struct CountsItsWork<Method, std::void_t<decltype(std::declval<const Method&>().work())>> : std::true_type {};
+}  // namespace stepper_detail
 
 template <class Model, class Method>
 class OneStepStepper {
@@ -44,7 +58,7 @@ class OneStepStepper {
 
   SPINNING_TOP_FLATTEN void attempt(const Model& model, const State& y0, const State& /*f0*/, double dt, Attempt& out) {
     out.y1 = y0;
-    method_.step(model, out.y1, dt);
+    step(model, out.y1, dt);
   }
   void accepted(const State& /*y0*/, const State& /*f0*/, const Attempt& /*attempt*/, double /*t0*/, double /*dt*/) {}
 
@@ -52,7 +66,7 @@ class OneStepStepper {
   auto interpolant(const Model& model, double t0, const State& y0) {
     return [this, &model, t0, &y0](double t) {
       State y = y0;
-      method_.step(model, y, t - t0);
+      step(model, y, t - t0);
       normalize_attitude(y);
       return y;
     };
@@ -66,8 +80,22 @@ class OneStepStepper {
 
   std::optional<ClosedFormRange> closed_form_range(double /*t*/) const { return std::nullopt; }
 
+  /// Work units spent since the stepper was built (this file's header).
+  long work() const {
+    if constexpr (stepper_detail::CountsItsWork<Method>::value)
+      return method_.work();
+    else
+      return work_;
+  }
+
  private:
+  SPINNING_TOP_FLATTEN void step(const Model& model, State& y, double dt) {
+    method_.step(model, y, dt);
+    if constexpr (!stepper_detail::CountsItsWork<Method>::value) work_ += Method::kWorkPerStep;
+  }
+
   Method method_;
+  long work_ = 0;  // for a method of constant work per step
 };
 
 template <class Model, class Method>
@@ -107,6 +135,9 @@ class EmbeddedStepper {
 
   /// The method and its work counters (e.g. RadauIIA5::statistics()).
   const Method& method() const { return method_; }
+  /// Work units spent (this file's header): the method counts them, in its attempts and its
+  /// dense output.
+  long work() const { return method_.work(); }
   /// The size of the last accepted step [s] (0 before the first).
   double last_step() const { return has_dense_ ? dense_.dt : 0.0; }
 

@@ -38,6 +38,7 @@ class DormandPrince853 {
   };
 
   SPINNING_TOP_FLATTEN void attempt(const Model& model, const State& y0, const State& f0, double dt, Attempt& out) {
+    work_ += kStagesPerStep;
     k_[0] = f0;
     for (int s = 1; s < 12; ++s) model.derivative(stage_start(y0, dt, s), k_[s]);
     out.y1 = stage_start(y0, dt, 12);
@@ -79,6 +80,7 @@ class DormandPrince853 {
   /// steps of a run with sparse output (or none) never need it: it costs 3 of the 15
   /// evaluations of f and the 4 x 12 vector terms of kD.
   SPINNING_TOP_FLATTEN void complete_dense(const Model& model, DenseStep& d) {
+    work_ += kDenseStages;
     for (int s = 13; s < 16; ++s) model.derivative(stage_start(d.y0, d.dt, s), k_[s]);
     for (int i = 0; i < 4; ++i) {
       State sum = State::Zero();
@@ -87,6 +89,9 @@ class DormandPrince853 {
       d.f[3 + i] = d.dt * sum;
     }
   }
+
+  /// Work units spent (work_budget.hpp): the evaluations of f of its attempts and dense outputs.
+  long work() const { return work_; }
 
   /// y(t0 + x dt), seventh order: the nested form of dop853.f's CONTD8.
   SPINNING_TOP_FLATTEN static State dense(const DenseStep& d, double t) {
@@ -108,6 +113,8 @@ class DormandPrince853 {
   }
 
   State k_[16];
+  long work_ = 0;
+  static constexpr int kDenseStages = 3;
 
   static constexpr double kA[16][16] = {
       {0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0},

@@ -39,6 +39,7 @@ class DormandPrince54 {
   void restart() {}
 
   SPINNING_TOP_FLATTEN void attempt(const Model& model, const State& y0, const State& f0, double dt, Attempt& out) {
+    work_ += kStagesPerStep;
     model.derivative(y0 + dt * (a21 * f0), k2_);
     model.derivative(y0 + dt * (a31 * f0 + a32 * k2_), k3_);
     model.derivative(y0 + dt * (a41 * f0 + a42 * k2_ + a43 * k3_), k4_);
@@ -65,6 +66,10 @@ class DormandPrince54 {
   /// The continuous extension needs nothing beyond prepare_dense().
   void complete_dense(const Model& /*model*/, DenseStep& /*d*/) {}
 
+  /// Work units spent (work_budget.hpp): the evaluations of f of its attempts (its dense output
+  /// needs none).
+  long work() const { return work_; }
+
   /// y(t0 + theta dt), fourth order, theta in [0, 1].
   SPINNING_TOP_FLATTEN static State dense(const DenseStep& d, double t) {
     const double theta = (t - d.t0) / d.dt, theta1 = 1.0 - theta;
@@ -73,6 +78,7 @@ class DormandPrince54 {
 
  private:
   State k2_, k3_, k4_, k5_, k6_;
+  long work_ = 0;
 
   static constexpr double a21 = 1.0 / 5.0;
   static constexpr double a31 = 3.0 / 40.0, a32 = 9.0 / 40.0;

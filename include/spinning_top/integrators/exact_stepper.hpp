@@ -38,6 +38,7 @@ class ExactStepper {
     table_.restart();
     if (built_ && t == start_t_ && y == start_y_ && same_model(model)) return;
     Solution next(model, t, y);
+    work_ += kBuildWork + kWorkPerFourierTerm * next.terms();
     built_ = false;
     solution_ = std::move(next);
     parameters_ = model.parameters();
@@ -49,6 +50,11 @@ class ExactStepper {
   }
 
   void attempt(const Model& /*model*/, const State& /*y0*/, const State& /*f0*/, double /*dt*/, Attempt& /*out*/) {}
+  /// Work units spent (work_budget.hpp): the solutions built by restart(), about 4 us and 0.23 us
+  /// per Fourier term (bench/budget_time.cpp, in evaluations of the fixed tip's f, 0.014 us).
+  /// The span itself is one step of the budget. Its answers are not counted: each costs at most
+  /// one piece of the table and one evaluation, and a caller's count of requests bounds them.
+  long work() const { return work_; }
   void accepted(const State& /*y0*/, const State& /*f0*/, const Attempt& /*attempt*/, double /*t0*/, double /*dt*/) {}
 
   /// The first validity event after the start (t0, y0), from the closed form; the state
@@ -130,8 +136,11 @@ class ExactStepper {
            a.friction == b.friction;
   }
 
+  static constexpr long kBuildWork = 300, kWorkPerFourierTerm = 16;
+
   Solution solution_;
   PeriodTable<Model> table_;
+  long work_ = 0;
   // The start the solution was built from (for reset() to the same state).
   bool built_ = false;
   double start_t_ = 0.0, spin_ = 0.0;

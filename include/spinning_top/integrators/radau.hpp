@@ -57,7 +57,31 @@ struct RadauStatistics {
   long decompositions = 0;     ///< Newton matrices factorized (a real + complex LU pair, or per stage)
   long dense_solves = 0;       ///< partial collocation steps for requests inside a step
   long per_stage_attempts = 0; ///< attempts solved by the per-stage Newton
+  /// Work units (work_budget.hpp): the evaluations of f, and the linear algebra at its measured
+  /// cost in evaluations (radau_work below), in attempts accepted or not and in dense outputs.
+  long work = 0;
 };
+
+/// The work (work_budget.hpp) of RADAU5's linear algebra in evaluations of the model's f, for a
+/// state of n components: measured for the viscous top (n = 11) by bench/budget_time.cpp (its
+/// f: 0.032 us; a real 11 x 11 LU 10 evaluations, a complex one 56, their solves 5 and 13, an
+/// LU with its inverse 34, a product 7), and scaled as n for smaller states (the fixed tip's
+/// n = 6 measured within 2x of that).
+namespace radau_work {
+constexpr long scaled(long at_n11, int n) { return (at_n11 * n + 10) / 11; }
+/// A real and a complex LU (the simplified Newton's matrices).
+constexpr long decomposition(int n) { return scaled(66, n); }
+/// The real LU alone (the error estimate's, after per-stage steps).
+constexpr long real_decomposition(int n) { return scaled(10, n); }
+/// The per-stage Newton's block elimination: two LUs with their inverses, two products, an LU.
+constexpr long per_stage_decomposition(int n) { return scaled(95, n); }
+/// A simplified Newton iteration's real and complex solves and its transforms (f apart).
+constexpr long newton_solve(int n) { return scaled(18, n); }
+/// A per-stage Newton iteration's six products and one solve (f apart).
+constexpr long per_stage_solve(int n) { return scaled(11, n); }
+/// One real solve (the error estimate).
+constexpr long real_solve(int n) { return scaled(5, n); }
+}  // namespace radau_work
 
 /// radau5.f's tolerance map (rtol' = 0.1 rtol^(2/3)): the controller's error norm is
 /// (|err| / rtol')^(3/2) / rtol, i.e. the vector err scaled by (|err| / 0.1)^(1/2) / 0.1, with
@@ -107,6 +131,7 @@ class RadauIIA5 {
 
   /// Starts a run (the driver's reset): no Jacobian, no starting guess, counters at zero.
   void restart() {
+    earlier_work_ += statistics_.work;
     statistics_ = RadauStatistics();
     have_jacobian_ = have_predictor_ = attempt_pending_ = jacobian_is_fresh_ = false;
     per_stage_newton_ = used_per_stage_ = returned_to_simplified_ = false;
@@ -118,6 +143,9 @@ class RadauIIA5 {
   }
 
   const RadauStatistics& statistics() const { return statistics_; }
+  /// Work units spent since the method was built (work_budget.hpp): RadauStatistics::work of
+  /// this run and of the runs before its restarts.
+  long work() const { return earlier_work_ + statistics_.work; }
 
   void attempt(const Model& model, const State& y0, const State& f0, double dt, Attempt& out) {
     ++statistics_.attempts;
@@ -139,10 +167,12 @@ class RadauIIA5 {
           decompose(jacobian_, dt, lu_);
           real_step_ = complex_step_ = dt;
           ++statistics_.decompositions;
+          statistics_.work += radau_work::decomposition(kN);
         }
         z = guess;
         const NewtonOutcome outcome = solve_stages(model, y0, dt, lu_, scale, z, faccon_);
         statistics_.newton_iterations += outcome.iterations;
+        statistics_.work += outcome.iterations * (kStages + radau_work::newton_solve(kN));
         if (outcome.converged) {
           contraction_ = outcome.contraction;
           converged = true;
@@ -175,6 +205,8 @@ class RadauIIA5 {
         ++statistics_.decompositions;
         const NewtonOutcome outcome = solve_stages_per_stage(model, y0, per_stage_lu_, scale, z, f, faccon_);
         statistics_.newton_iterations += outcome.iterations;
+        statistics_.work += kStages * (1 + kN) + radau_work::per_stage_decomposition(kN) +
+                            per_stage_newton_work(outcome.iterations);
         converged = outcome.converged;
         if (!converged) ++statistics_.newton_failures;
       }
@@ -188,12 +220,15 @@ class RadauIIA5 {
       if (dt != real_step_) {
         lu_.real.compute(Jacobian::Identity() * (kGamma / dt) - jacobian_);
         real_step_ = dt;
+        statistics_.work += radau_work::real_decomposition(kN);
       }
     }
     z_ = z;
     out.y1 = y0 + z.col(2);
     model.derivative(out.y1, out.f1);
-    estimate_error(model, y0, f0, out.y1, dt, z, first_step_ || after_rejection, out.error);
+    const bool improve = first_step_ || after_rejection;
+    estimate_error(model, y0, f0, out.y1, dt, z, improve, out.error);
+    statistics_.work += 1 + radau_work::real_solve(kN) * (improve ? 2 : 1) + (improve ? 1 : 0);
   }
 
   /// The step just attempted is accepted: keep its stages (the next step's starting guess and
@@ -273,12 +308,13 @@ class RadauIIA5 {
     double faccon = 1.0;
     Stages z = guess;
     NewtonOutcome outcome;
-    long decompositions = 0;
+    long decompositions = 0, work = 0;
     if (!d.per_stage_newton) {
       Factorization lu;
       decompose(d.jacobians[0], tau, lu);
       ++decompositions;
       outcome = solve_stages(*d.model, y_start, tau, lu, scale, z, faccon);
+      work += radau_work::decomposition(kN) + outcome.iterations * (kStages + radau_work::newton_solve(kN));
     }
     int iterations = outcome.iterations;
     if (!outcome.converged) {
@@ -295,8 +331,10 @@ class RadauIIA5 {
           d.model->derivative(State(y_start + z.col(i)), fi);
           f.col(i) = fi;
         }
+        work += kStages;
       } else {
         stage_jacobians(*d.model, y_start, z, j, f);
+        work += kStages * (1 + kN);
       }
       PerStageFactorization lu;
       decompose_per_stage(j, tau, lu);
@@ -304,9 +342,11 @@ class RadauIIA5 {
       faccon = 1.0;
       outcome = solve_stages_per_stage(*d.model, y_start, lu, scale, z, f, faccon);
       iterations += outcome.iterations;
+      work += radau_work::per_stage_decomposition(kN) + per_stage_newton_work(outcome.iterations);
     }
     if (d.statistics != nullptr) {
       ++d.statistics->dense_solves;
+      d.statistics->work += work;
       d.statistics->decompositions += decompositions;
       d.statistics->newton_iterations += iterations;
       if (!outcome.converged) ++d.statistics->newton_failures;
@@ -359,8 +399,15 @@ class RadauIIA5 {
   void fresh_jacobian(const Model& model, const State& y0, const State& f0) {
     forward_difference_jacobian(model, y0, f0, jacobian_);
     ++statistics_.jacobians;
+    statistics_.work += kN;
     have_jacobian_ = jacobian_is_fresh_ = true;
     real_step_ = complex_step_ = 0.0;
+  }
+
+  /// The work of a per-stage Newton solve of `iterations` iterations: f at the stages in each but
+  /// the first (which starts from f at the initial Z), and the solves.
+  static constexpr long per_stage_newton_work(int iterations) {
+    return iterations * radau_work::per_stage_solve(kN) + (iterations > 0 ? iterations - 1 : 0) * kStages;
   }
 
   static void decompose(const Jacobian& j, double h, Factorization& lu) {
@@ -612,6 +659,7 @@ class RadauIIA5 {
   int per_stage_steps_left_ = 0, per_stage_run_ = kPerStageNewtonSteps;
   bool returned_to_simplified_ = false;
   RadauStatistics statistics_;
+  long earlier_work_ = 0;  // work of the runs before the last restart()
 };
 
 

@@ -13,6 +13,8 @@ class ClassicalRk4 {
   using State = typename Model::State;
   static constexpr int kOrder = 4;
   static constexpr int kStagesPerStep = 4;
+  /// Work units per step (work_budget.hpp): its evaluations of f.
+  static constexpr long kWorkPerStep = kStagesPerStep;
   static constexpr const char* kName = "rk4";
 
   SPINNING_TOP_FLATTEN void step(const Model& model, State& y, double dt) const {

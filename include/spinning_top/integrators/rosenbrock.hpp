@@ -26,6 +26,10 @@ class Rodas4 {
   static constexpr int kOrder = 4;
   static constexpr int kStages = 6;
   static constexpr const char* kName = "rodas4";
+  /// Work units per step (work_budget.hpp): the central-difference Jacobian (2n evaluations of
+  /// f), the 6 stages' evaluations, and the linear algebra at its measured cost in evaluations of
+  /// the viscous top's f (bench/budget_time.cpp): one n x n LU (10) and 6 solves (5 each).
+  static constexpr long kWorkPerStep = 2 * kN + kStages + 10 + kStages * 5;
 
   void step(const Model& model, State& y, double dt) {
     finite_difference_jacobian(model, y, jacobian_);

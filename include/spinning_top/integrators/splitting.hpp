@@ -75,6 +75,14 @@ template <class Scheme, class = void>
 struct IsStrangComposition : std::false_type {};
 template <class Scheme>
 struct IsStrangComposition<Scheme, std::void_t<decltype(Scheme::kStrangSteps)>> : std::true_type {};
+/// The free rotations of one step of the scheme.
+template <class Scheme>
+constexpr long rotations_per_step() {
+  if constexpr (IsStrangComposition<Scheme>::value)
+    return Scheme::kStrangSteps;
+  else
+    return Scheme::kRotations;
+}
 }  // namespace detail
 
 /// One-step method for FixedStepDriver: step(model, y, dt). Only the fixed tip has this
@@ -89,6 +97,10 @@ class Splitting<FixedTip, Scheme> {
   using State = FixedTip::State;
   static constexpr int kOrder = Scheme::kOrder;
   static constexpr const char* kName = Scheme::kName;
+  /// Work units per step (work_budget.hpp): a free rotation with its gravity kick costs about 3
+  /// evaluations of the fixed tip's derivative (its sines and cosines; measured by
+  /// bench/budget_time.cpp).
+  static constexpr long kWorkPerStep = 3 * detail::rotations_per_step<Scheme>();
 
   void step(const FixedTip& model, State& y, double dt) const {
     if constexpr (detail::IsStrangComposition<Scheme>::value) {
