@@ -79,6 +79,12 @@ class SceneSimulator final : public ContactPhase<Model> {
     s.body_rates = Vector3(y[state_index::kOmegaX], y[state_index::kOmegaY], model_.spin());
     s.outputs = model_.outputs(y);
     if constexpr (!Model::kConservesVerticalAngularMomentum) s.outputs.vertical_angular_momentum = 0.0;
+    if (driver_.event() == Event::kLiftOff && s.outputs.normal_force < 0.0) {
+      // A run that starts where R < 0 (after_lift_off: stop) ends with lift_off at once: the floor
+      // cannot pull, so what it exerts there is 0, as in the hybrid simulator's snapshot.
+      s.outputs.normal_force = 0.0;
+      s.outputs.contact_force = Vector3::Zero();
+    }
     return s;
   }
 

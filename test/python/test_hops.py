@@ -188,3 +188,20 @@ def test_transitions_passed_by_advance_to_are_taken_not_rows():
     sim.advance_to(0.145)
     run = sim.run([0.15, 0.2])
     assert run["time"][0] >= 0.15
+
+
+@pytest.mark.parametrize("scene", ["fixed_tip", "frictionless", "viscous"])
+def test_a_lift_off_at_the_release_shows_no_pulling_floor(scene):
+    """Issue 19, item 9: released where R < 0 with after_lift_off: stop, the run ends with lift_off
+    at t = 0, and the floor force it shows is 0, not the negative R of the invalid contact state."""
+    case = {**TOY, "scene": scene, "initial/tilt": 0.5, "initial/nutation_rate": 60.0, "initial/spin": 150.0,
+            "after_lift_off": "stop"}
+    if scene == "viscous":
+        case["friction"] = 0.02
+    row = st.run_case(case, duration=0.1)
+    assert row["outcome"] == "lift_off"
+    assert row["event_time"] == 0.0
+    assert row["min_normal_force"] == 0.0
+    traj = st.Simulator(case).run(np.array([0.0, 0.01]))
+    assert traj["event"] == "lift_off"
+    assert np.all(traj["normal_force"] >= 0.0)
