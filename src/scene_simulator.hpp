@@ -94,7 +94,10 @@ class SceneSimulator final : public ContactPhase<Model> {
     if (!range) return std::nullopt;
     // tilt = 2 asin(sqrt((1 - cos tilt) / 2)): accurate near the vertical, where acos is not.
     const double half = std::clamp(0.5 * range->one_minus_cos_max_tilt, 0.0, 1.0);
-    return MotionRange{2.0 * std::asin(std::sqrt(half)), config_.top.mass * range->least_normal_force_per_mass};
+    double least_normal_force = config_.top.mass * range->least_normal_force_per_mass;
+    // A run that ended with lift_off shows R = 0 there, never the floor pulling (snapshot()).
+    if (driver_.event() == Event::kLiftOff) least_normal_force = std::max(least_normal_force, 0.0);
+    return MotionRange{2.0 * std::asin(std::sqrt(half)), least_normal_force};
   }
 
   bool reset() override {
