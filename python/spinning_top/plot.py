@@ -284,6 +284,8 @@ def _check_arguments(args):
         raise _cli.UsageError("--duration", f"must be > 0 s, got {args.duration:.6g}")
     if args.bag is None and args.duration is None and args.no_show:
         raise _cli.UsageError("--no-show", "live without a window needs --duration")
+    if args.output is not None and not args.output:
+        raise _cli.UsageError("--output", "an empty file name")
     fmt = _cli.check_output("--output", args.output, _cli.figure_formats()) if args.output else None
     return topics, fields, fmt
 

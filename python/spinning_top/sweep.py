@@ -344,7 +344,10 @@ def _parse_vary(text):
         raise _cli.UsageError("--vary", f"expected KEY=LOW:HIGH[:N] or KEY=V1,V2,..., got {_cli.short(text)}")
     key, spec = text.split("=", 1)
     try:
-        parts = [float(p) for p in spec.split(":" if ":" in spec else ",")]
+        texts = spec.split(":" if ":" in spec else ",")
+        if any("_" in t for t in texts):  # Python's float reads 1_0 as 10; --set and scene files refuse it
+            raise ValueError
+        parts = [float(p) for p in texts]
         if not all(math.isfinite(p) for p in parts):
             raise ValueError
         if ":" not in spec:
@@ -397,6 +400,10 @@ def _options(args):
 
 def _check_outputs(args):
     """Refuses, before any case runs, outputs that cannot be written as asked."""
+    if args.output is not None and not args.output:
+        raise _cli.UsageError("--output", "an empty file name; leave --output out to write to stdout")
+    if args.plot is not None and not args.plot:
+        raise _cli.UsageError("--plot", "an empty file name")
     if args.output:
         if _cli.check_output("--output", args.output, ROW_FORMATS) == "parquet" and _parquet_engine():
             raise _cli.UsageError("--output", f"{_cli.short_path(args.output)}: {_parquet_engine()}")

@@ -56,6 +56,7 @@ def test_writes_exactly_the_file_asked_for(plot_main, tmp_path):
     ("top.xyz", "--output: 'top.xyz' has extension .xyz; give one of "),
     ("dir.png", "--output: 'dir.png' is a directory; give a file name"),
     ("missing/top.png", "--output: 'missing/top.png': no directory "),
+    ("", "--output: an empty file name"),
 ])
 def test_refuses_an_output_it_would_not_write_as_asked(plot_main, tmp_path, output, message):
     (tmp_path / "dir.png").mkdir()

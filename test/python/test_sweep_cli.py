@@ -58,6 +58,9 @@ def sweep_main(capsys, monkeypatch, source_dir, tmp_path):
     ([*TWO, "--plot", "map.xyz"], "--plot: 'map.xyz' has extension .xyz; give one of"),
     ([*TWO, "--plot", "map"], "--plot: 'map' has no extension"),
     ([*TWO, "--plot", "dir.png"], "--plot: 'dir.png' is a directory"),
+    (["--vary", GRID, "--output", ""], "--output: an empty file name"),
+    ([*TWO, "--plot", ""], "--plot: an empty file name"),
+    (["--vary", "initial/spin=1_0:20:2"], "--vary initial/spin: "),
     ([*TWO, "--output", "same.png", "--plot", "same.png"], "--output: 'same.png' has extension .png"),
     # Numbers of the run.
     (["--vary", GRID, "--workers", "-1"], "--workers: must be a whole number >= 1, got -1"),
