@@ -22,7 +22,7 @@ SampledRun sample_run(Simulator& simulator, long long count, const std::function
   run.event = simulator.event();  // an initial state that already violates the model
   for (long long i = 0; i < count && (i == 0 || run.event == Event::kNone); ++i) {
     const double t = time_at(i);
-    run.event = simulator.advance_to(t, WorkBudget::steps_left(max_steps, simulator.steps()));
+    run.event = simulator.advance_to(t, WorkBudget::steps_left(max_steps, simulator.work()));
     // The transitions passed on the way (hybrid model), each a sample at its own time.
     for (const Transition& transition : simulator.take_transitions())
       sample(transition.state.time, transition.state, transition.event);

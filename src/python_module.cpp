@@ -409,7 +409,7 @@ PYBIND11_MODULE(_core, m) {
             Event event;
             {
               py::gil_scoped_release release;
-              event = s.advance_to(t, WorkBudget::steps_left(max_steps, s.steps()));
+              event = s.advance_to(t, WorkBudget::steps_left(max_steps, s.work()));
             }
             return std::string(to_string(event));
           },

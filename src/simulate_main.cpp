@@ -42,9 +42,10 @@ namespace {
 constexpr int kExitRuntimeError = 1;
 constexpr int kExitBadInput = 2;
 constexpr int kExitStepBudget = 3;
-/// Integration steps one run may take unless --max-steps says otherwise: about 3 minutes of
-/// CPU for dop853 on the toy top (1.5 us per step), so that an absurd request (a fast spin over
-/// a long duration, a tiny step) ends with a clear error instead of hours of CPU.
+/// Budget steps one run may take unless --max-steps says otherwise (work_budget.hpp: work counted
+/// alike on every method, 0.1-1 us of CPU per budget step, bench/budget_time.cpp): at most about
+/// 100 s of CPU, so that an absurd request (a fast spin over a long duration, a tiny step) ends
+/// with a clear error instead of hours of CPU.
 constexpr double kDefaultMaxSteps = 1e8;
 constexpr double kDefaultDuration = 10.0;    // [s]
 constexpr double kDefaultOutputRate = 100.0;  // [Hz]

@@ -113,7 +113,7 @@ class Case {
     for (int i = 1; i <= limits.samples && outcome.event == Event::kNone; ++i) {
       const double t = duration * i / limits.samples;
       try {
-        const long remaining = limits.steps_per_case - simulator->steps() - steps_before_reset_;
+        const long remaining = limits.steps_per_case - simulator->work() - steps_before_reset_;
         outcome.event = simulator->advance_to(t, WorkBudget::steps(std::max(0L, remaining)));
         if (outcome.event == Event::kNone && simulator->time() < t) {
           outcome.kind = Outcome::Kind::kOutOfBudget;
@@ -132,7 +132,7 @@ class Case {
       if (outcome.event != Event::kNone) break;
       if (chance(0.15)) live_update(*simulator, outcome);
       if (chance(0.03)) {
-        steps_before_reset_ += simulator->steps();
+        steps_before_reset_ += simulator->work();
         simulator->reset();
         ++outcome.resets;
         rebaseline(*simulator);

@@ -7,6 +7,7 @@
 
 #include <cstdio>
 
+#include "spinning_top/case_run.hpp"
 #include "spinning_top/integrators/registry_rows.hpp"
 #include "spinning_top/simulator.hpp"
 
@@ -130,6 +131,32 @@ TEST(WorkBudget, RunWorkNeverDecreasesAndCountsAtLeastTheSteps) {
                 transitions, simulator->steps(), simulator->work());
     EXPECT_GT(transitions, 2) << to_string(config.scene) << ": no transition, nothing tested";
   }
+}
+
+// A front end's run (simulate, run_case and the sweep, the Python module's run: sample_run)
+// counts its allowance against Simulator::work(): with stiff friction and a request every 1 ms,
+// an allowance of 2000 steps ends at 2000 steps of work (plus the last step's overrun). Counted
+// against accepted steps, each request's call had 2000 - steps() steps of work to spend again.
+TEST(WorkBudget, ASampledRunSpendsItsAllowanceInWork) {
+  SceneConfig config;
+  config.scene = SceneType::kViscous;
+  config.top.friction = 1e5;
+  config.initial.tilt = 0.3;
+  config.initial.spin = 150.0;
+  config.initial.precession_rate = 5.0;
+  config.initial.nutation_rate = 2.0;
+  config.initial.velocity_x = 0.05;
+  config.integrator.type = IntegratorType::kRadau5;
+  config.integrator.tolerance = 1e-12;
+  const auto simulator = make_simulator(config);
+  long samples = 0;
+  const SampledRun run = sample_run(*simulator, 1001, [](long long i) { return 1e-3 * static_cast<double>(i); }, 2000.0,
+                                    StateWhereStepsRunOut::kDrop, [&](double, const Snapshot&, Event) { ++samples; });
+  std::printf("[ measured ] an allowance of 2000 steps: %ld samples, %ld radau5 steps, work %ld\n", samples,
+              simulator->steps(), simulator->work());
+  EXPECT_TRUE(run.out_of_steps);
+  EXPECT_GE(simulator->work(), 2000);
+  EXPECT_LE(simulator->work(), 2000 + 50);  // a radau5 step here is about 15 steps of work
 }
 
 }  // namespace
