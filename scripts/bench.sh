@@ -26,7 +26,7 @@ if [ "$(id -u)" -eq 0 ]; then "$SPINNING_TOP_ROOT/scripts/setup.sh"; fi
 echo "bench.sh: building the benchmarks in $SPINNING_TOP_BUILD (Release)"
 cmake -S "$SPINNING_TOP_ROOT" -B "$SPINNING_TOP_BUILD" \
   -DPYTHON_EXECUTABLE=/usr/bin/python3 -DCMAKE_BUILD_TYPE="${CMAKE_BUILD_TYPE:-Release}" >/dev/null
-targets=(work_precision reinit_cost fallback_tolerance viscous_default fuzz_soak spinning_top_python)
+targets=(work_precision reinit_cost fallback_tolerance viscous_default fuzz_soak budget_time spinning_top_python)
 grep -q "add_executable(extreme_cases" "$SPINNING_TOP_ROOT/bench/CMakeLists.txt" && targets+=(extreme_cases)
 cmake --build "$SPINNING_TOP_BUILD" --target "${targets[@]}" -- -j"$(nproc)"
 
@@ -58,6 +58,9 @@ if [ ${#quick[@]} -eq 0 ]; then
 else
   "$bin/fuzz_soak" --output-dir "$results" --cases 10000 --hours 0.1
 fi
+
+echo "bench.sh: CPU per step of the work budget, method by method (issue 19)"
+"$bin/budget_time" "$results/budget_time.md"
 
 echo "bench.sh: sweep throughput: cases per second per core, a 1e6-case map, Dask's overhead (issue 11)"
 (
