@@ -2067,30 +2067,43 @@ def gen_node(ctx, rng):
     set_state("velocity_x 1 on a fixed tip", "refuse", ["velocity_x"], velocity_x=1.0)
     set_state("spin 4.9e-324, tilt -0", "accept", [], spin=5e-324, tilt=-0.0)
 
+    def watch(prefix, duration, then):
+        """Watches the node's topics under prefix while `then` is called: the answer, and whether
+        the node survived it."""
+        r = rig.client({"op": "watch", "prefix": prefix, "duration": duration, "then": then})
+        res = Res()
+        res.extra["r"] = r
+        res.extra["alive"] = rig.node.poll() is None
+        rig.after_call(r)
+        return res
+
+    def died_or_hung(res):
+        """The crash or hang class of a watched call, or None when it was answered."""
+        r = res.extra["r"]
+        if not res.extra["alive"]:
+            rig.node = None
+            return "crash", "node died"
+        if r.get("timeout") or "success" not in r:
+            return "hang", str(r)[:100]
+        return None
+
     # a spawned viscous top and velocity 1e300 through set_state
     def visc_velocity():
         def fn():
             ensure_node()
             rig.client({"op": "call", "srv": "/st/spawn", "type": "spinning_top/Spawn",
                         "req": {"name": "visc", "scene_file": ctx.config("viscous"), "keys": [], "x": 0.5, "y": 0.0}})
-            r = rig.client({"op": "watch", "prefix": "/st/visc", "duration": 1.0,
-                            "then": {"srv": "/st/set_state", "type": "spinning_top/SetState",
-                                     "req": {"name": "visc", "tilt": 0.3, "heading": 0.0, "spin_angle": 0.0,
-                                             "precession_rate": 0.0, "nutation_rate": 0.0, "spin": 150.0,
-                                             "velocity_x": 1e300, "velocity_y": 0.0, "x": 0.5, "y": 0.0}}})
-            res = Res()
-            res.extra["r"] = r
-            res.extra["alive"] = rig.node.poll() is None
-            rig.after_call(r)
-            return res
+            return watch("/st/visc", 1.0,
+                         {"srv": "/st/set_state", "type": "spinning_top/SetState",
+                          "req": {"name": "visc", "tilt": 0.3, "heading": 0.0, "spin_angle": 0.0,
+                                  "precession_rate": 0.0, "nutation_rate": 0.0, "spin": 150.0,
+                                  "velocity_x": 1e300, "velocity_y": 0.0, "x": 0.5, "y": 0.0}})
 
         def classify(res):
+            failed = died_or_hung(res)
+            if failed:
+                return failed
             r = res.extra["r"]
-            if not res.extra["alive"]:
-                rig.node = None
-                return "crash", "node died"
-            if r.get("timeout") or "success" not in r:
-                return "hang", str(r)[:100]
             if not r["success"]:
                 p = message_problem(r["message"], ["velocity_x"])
                 return ("unclear error or traceback", p) if p else ("clear error", first_line(r["message"]))
@@ -2120,20 +2133,13 @@ def gen_node(ctx, rng):
                         "req": {"name": name, "scene_file": "", "x": -0.4, "y": 0.0,
                                 "keys": ["rim_radius=0", "rim_distance=0", f"initial/tilt={tilt}",
                                          f"initial/precession_rate={prec}"]}}
-            r = rig.client({"op": "watch", "prefix": "/st/" + name, "duration": 1.5, "then": then})
-            res = Res()
-            res.extra["r"] = r
-            res.extra["alive"] = rig.node.poll() is None
-            rig.after_call(r)
-            return res
+            return watch("/st/" + name, 1.5, then)
 
         def classify(res):
+            failed = died_or_hung(res)
+            if failed:
+                return failed
             r = res.extra["r"]
-            if not res.extra["alive"]:
-                rig.node = None
-                return "crash", "node died"
-            if r.get("timeout") or "success" not in r:
-                return "hang", str(r)[:100]
             if not r["success"]:
                 return "clear error", first_line(r["message"])
             if r.get("min_R") is not None and r["min_R"] < -1e-9:
