@@ -9,6 +9,7 @@
 #include <cmath>
 #include <string>
 
+#include "core_test_support.hpp"
 #include "spinning_top/integrators/registry_rows.hpp"
 #include "spinning_top/integrator_registry.hpp"
 #include "spinning_top/integrators/dop853.hpp"
@@ -81,13 +82,7 @@ TEST(SplittingOrder, KahanLiEightIsEighthOrder) {
 
 /// A viscous top that slips (G moves at 5 cm/s) against mild friction, k = 0.5 N s/m:
 /// lambda = k (1/m + h^2/A) = 10 1/s, not stiff, so every method's order shows.
-Viscous slipping_top() {
-  TopParameters top;
-  top.friction = 0.5;
-  InitialConditions ic = nutating_top();
-  ic.velocity_x = 0.05;
-  return Viscous(top, ic);
-}
+Viscous slipping_top() { return core_test::slipping_top(0.5); }
 
 TEST(ImplicitOrder, Rodas4IsFourthOrder) {
   // Measured ratios 23.9, 21.3, 18.5, 17.1, 16.5 from dt = 4 ms down: asymptotic below 0.5 ms.

@@ -17,19 +17,7 @@ namespace {
 using core_test::report;
 using Radau = RadauIIA5<Viscous>;
 
-/// The toy top tilted 0.3 rad with some precession and nutation, G sliding at 5 cm/s, against
-/// friction k: every term of the viscous equations is exercised.
-Viscous slipping_top(double k) {
-  TopParameters top;
-  top.friction = k;
-  InitialConditions ic;
-  ic.tilt = 0.3;
-  ic.spin = 150.0;
-  ic.precession_rate = 5.0;
-  ic.nutation_rate = 2.0;
-  ic.velocity_x = 0.05;
-  return Viscous(top, ic);
-}
+using core_test::slipping_top;
 
 /// The state at `t` of a tight dop853 run (rate lambda = 10 1/s for k = 0.5: not stiff).
 Viscous::State dop853_reference(const Viscous& model, double t) {

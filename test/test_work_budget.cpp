@@ -7,6 +7,7 @@
 
 #include <cstdio>
 
+#include "core_test_support.hpp"
 #include "spinning_top/case_run.hpp"
 #include "spinning_top/integrators/registry_rows.hpp"
 #include "spinning_top/simulator.hpp"
@@ -32,17 +33,7 @@ using StiffRadau = Driver<CountingViscous, EmbeddedStepper<CountingViscous, Rada
 
 /// Stiff friction whose direction turns with the spin (radau.hpp, header): the per-stage Newton,
 /// a Jacobian per stage (3 x 12 evaluations) and a factorization in every step.
-CountingViscous stiff_slipping_top() {
-  TopParameters top;
-  top.friction = 1e5;
-  InitialConditions initial;
-  initial.tilt = 0.3;
-  initial.spin = 150.0;
-  initial.precession_rate = 5.0;
-  initial.nutation_rate = 2.0;
-  initial.velocity_x = 0.05;
-  return CountingViscous(top, initial);
-}
+CountingViscous stiff_slipping_top() { return core_test::slipping_top<CountingViscous>(1e5); }
 
 // One call with a budget of N steps: the evaluations of f it makes are at most N x 16 (a dop853
 // step's, work_budget.hpp) plus the last step's overrun. Before, the budget counted N accepted
