@@ -34,7 +34,7 @@ int main(int argc, char** argv) {
     // ros::spin(), ending at SIGINT as well as at a shutdown from elsewhere (rosnode kill).
     while (ros::ok() && !SpinningTopNode::stop_requested())
       queue.callAvailable(ros::WallDuration(0.1));
-    if (SpinningTopNode::stop_requested() && ros::ok()) node.unregister_topics_at_once();
+    if (SpinningTopNode::stop_requested() && ros::ok()) node.unregister_at_exit();
     ros::shutdown();
   } catch (const spinning_top::InvalidParameter& error) {
     ROS_FATAL("spinning_top: invalid parameter ~%s (%s)", error.parameter().c_str(), error.what());

@@ -100,6 +100,15 @@ TopInstance::TopInstance(std::string name, const SceneConfig& config, const Eige
   nh_.setParam("robot_description", top_urdf(start_config_.top, body_frame_));
 }
 
+std::vector<std::string> TopInstance::advertised_topics() const {
+  std::vector<std::string> topics;
+  for (const ros::Publisher* publisher : {&contact_point_publisher_, &normal_force_publisher_, &twist_publisher_,
+                                          &state_publisher_, &marker_publisher_, &event_publisher_,
+                                          &event_stamped_publisher_})
+    topics.push_back(publisher->getTopic());
+  return topics;
+}
+
 // A killed top's URDF is deleted by ~kill; at shutdown the parameters stay (as every node's do;
 // the launch file clears the namespace at the next start), which spares a call to the master per
 // top while the node exits.

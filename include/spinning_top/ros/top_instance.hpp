@@ -103,6 +103,9 @@ class TopInstance {
   Event event() const { return simulator_->event(); }
   /// Whether ~contact_point and ~state both have a subscriber (for ~wait_for_subscriber).
   bool subscribed() const { return listeners_->contact_point > 0 && listeners_->state > 0; }
+  /// The top's topics, resolved, in the order they were advertised (the master lists a node's
+  /// registrations in that order; see SpinningTopNode::unregister_at_exit).
+  std::vector<std::string> advertised_topics() const;
 
  private:
   /// Replaces the simulator (validated first) and rebaselines the energy.
