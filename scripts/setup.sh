@@ -20,9 +20,14 @@ packages=(
   libdiagnostic-msgs-dev python3-diagnostic-msgs libdiagnostic-updater-dev
   libdynamic-reconfigure-config-init-mutex-dev python3-dynamic-reconfigure
   # The Python module and sweeps (python/spinning_top): pybind11, numpy, pandas, scipy (Sobol),
-  # matplotlib (maps), tqdm (progress), Dask (clusters), pytest (their tests).
+  # matplotlib (maps), tqdm (progress), pytest (their tests).
   pybind11-dev python3-dev python3-pybind11 python3-setuptools python3-numpy python3-pandas python3-scipy
-  python3-matplotlib python3-tqdm python3-dask python3-distributed python3-pytest
+  python3-matplotlib python3-tqdm python3-pytest python3-yaml
+  # Optional for users (no rosdep key; sweeps on a cluster, --scheduler), needed by the tests of
+  # the scale-out: Dask.
+  python3-dask python3-distributed
+  # The tests' check of the package's CMake and package.xml (test/python/test_release.py).
+  catkin-lint
 )
 for arg in "$@"; do
   case "$arg" in

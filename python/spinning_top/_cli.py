@@ -84,9 +84,9 @@ def extension(path):
 def figure_formats():
     """matplotlib's formats that save without more software (pgf wants LaTeX; raw and rgba are no
     files to look at): extension -> what it is."""
-    from matplotlib.figure import Figure
+    from matplotlib.backend_bases import FigureCanvasBase
 
-    formats = Figure().canvas.get_supported_filetypes()
+    formats = FigureCanvasBase.get_supported_filetypes()  # a classmethod in every matplotlib 3
     return {ext: name for ext, name in formats.items() if ext not in ("pgf", "raw", "rgba")}
 
 

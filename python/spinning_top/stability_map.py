@@ -89,7 +89,7 @@ def shown_outcomes(rows):
     return np.where(hopped & (outcome == "fallen"), "fallen_after_hops", shown)
 
 
-def plot(rows, x, y, path, title=None, value="event_time"):
+def plot(rows, x, y, path, title=None, value="event_time", base=None, duration=None):
     """Writes a picture of two panels over (x, y) to exactly `path`, as PNG, SVG, PDF, ... by its
     extension (another extension, a directory, a missing directory or a failed write raise
     ValueError; no file is left half written): the outcome of each case, and `value`, a numeric
@@ -97,7 +97,11 @@ def plot(rows, x, y, path, title=None, value="event_time"):
     final_tilt shows how friction raises or lowers the axis, max_hop_height or lift_offs the hops,
     grey where the tip never left the floor). A grid design is drawn as cells, a
     random or Sobol one as points. Where x or y is initial/spin and the other keys of the threshold are fixed, the
-    sleeping-top threshold +-omega_crit is drawn as a line on both panels."""
+    sleeping-top threshold +-omega_crit is drawn as a line on both panels.
+
+    base and duration: the sweep's base keys and duration (for the threshold and the title); by
+    default those sweep.run kept with the rows (pandas >= 1.0 keeps them; with pandas 0.25, as
+    Ubuntu 20.04 has, or rows read back from a file, pass them, else no threshold is drawn)."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -111,8 +115,12 @@ def plot(rows, x, y, path, title=None, value="event_time"):
     for key in (x, y):
         if key not in rows:
             raise ValueError(f"{key} is not a varied key of this sweep (columns: {', '.join(rows.columns)})")
-    base = rows.attrs.get("base", {})
-    duration = rows.attrs.get("duration")
+    from spinning_top.sweep import sweep_info
+
+    kept_base, kept_duration = sweep_info(rows)
+    known_base = base is not None or kept_base is not None
+    base = dict(base if base is not None else kept_base or {})
+    duration = duration if duration is not None else kept_duration
     names = list(OUTCOMES)
     shown = shown_outcomes(rows)
     codes = np.array([names.index(o) if o in OUTCOMES else names.index("refused") for o in shown], float)
@@ -149,7 +157,7 @@ def plot(rows, x, y, path, title=None, value="event_time"):
 
     threshold = None
     threshold_keys = {"mass", "inertia_transverse", "inertia_axial", "tip_distance", "gravity", "scene"}
-    if "initial/spin" in (x, y) and not threshold_keys & set(rows.columns):
+    if known_base and "initial/spin" in (x, y) and not threshold_keys & set(rows.columns):
         threshold = sleeping_threshold(base)
     if threshold is not None:
         label = "ω_crit = 2√(A₀ m g h)/C" if str(base.get("scene", "fixed_tip")) == "fixed_tip" else "ω_crit = 2√(A m g h)/C"

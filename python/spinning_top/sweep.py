@@ -6,7 +6,7 @@ first terminal event (a hop goes on: issue 18), one row per case (issue 11).
     base = st.load_scene("config/fixed_tip.yaml")
     cases = sweep.design({"initial/spin": (0, 200, 101), "initial/tilt": (0, 1.4, 71)})
     rows = sweep.run(base, cases)                      # all local cores
-    rows = sweep.run(base, cases, scheduler="tcp://host:8786")   # a Dask cluster
+    rows = sweep.run(base, cases, scheduler="tcp://host:8786")   # a Dask cluster (optional)
 
 A design is a dict key -> numpy array (one value per case). The rows are a pandas DataFrame:
 the varied keys, then the outcome columns of ``OUTCOME_COLUMNS``. Cases are run in batches by
@@ -14,9 +14,15 @@ the varied keys, then the outcome columns of ``OUTCOME_COLUMNS``. Cases are run 
 case depends on its own configuration only, so the rows are the same, bit for bit, whichever
 runs them and however they are batched.
 
+Dask is optional (python3-dask and python3-distributed have no rosdep rule): it is imported only
+for a scheduler, and a local sweep never needs it. The Sobol design needs scipy.stats.qmc (SciPy
+>= 1.7), which Ubuntu 20.04 does not ship; it is imported only for that design. Without them, a
+sweep that asks for them is refused with NotAvailable, saying what to install.
+
 Command line: ``python3 -m spinning_top.sweep --help``.
 """
 import concurrent.futures
+import io
 import math
 import numbers
 import os
@@ -54,6 +60,40 @@ MAX_WORKERS = 1024
 #: Formats of the rows (--output): extension -> name.
 ROW_FORMATS = {"csv": "CSV", "parquet": "Parquet"}
 
+#: How to get Dask, for --scheduler (Debian and Ubuntu package it; rosdep does not know it).
+DASK_INSTALL = "apt-get install python3-dask python3-distributed (or: pip3 install --user distributed)"
+
+
+class NotAvailable(ImportError):
+    """An optional feature whose module is not installed, or too old, here; the message says
+    which and how to get it (Dask for a scheduler, scipy.stats.qmc for a Sobol design)."""
+
+
+def _distributed():
+    """Dask's distributed module, imported only for a scheduler: a local sweep needs no Dask."""
+    try:
+        import distributed
+    except ImportError as error:
+        raise NotAvailable(f"a Dask scheduler needs Dask, which is not installed here ({error}); install it with "
+                           f"{DASK_INSTALL}, or leave the scheduler out to run on this machine's cores") from None
+    return distributed
+
+
+def _sobol_engine():
+    """scipy.stats.qmc (SciPy >= 1.7), imported only for a Sobol design: Ubuntu 20.04 ships
+    SciPy 1.3.3, without it, and the grid and random designs do not need it."""
+    try:
+        from scipy.stats import qmc
+    except ImportError:
+        try:
+            import scipy
+            have = f"SciPy {scipy.__version__} is installed"
+        except ImportError:
+            have = "SciPy is not installed"
+        raise NotAvailable(f"a sobol design needs scipy.stats.qmc (SciPy >= 1.7) and {have}: use a random design, "
+                           "or a newer SciPy (pip3 install --user 'scipy>=1.7')") from None
+    return qmc
+
 
 def _too_many(count):
     return ValueError(f"{count:.6g} cases, more than the {MAX_CASES:.6g} a sweep may run (sweep.MAX_CASES); "
@@ -73,7 +113,8 @@ def design(ranges, kind="grid", cases=None, seed=0):
     ranges: key -> (low, high, n) for a grid axis, (low, high) for a random or Sobol axis, or an
     explicit list of values (grid only). kind: "grid" (every combination, the first key varying
     slowest), "random" (uniform, numpy's PCG64 seeded with `seed`) or "sobol" (scrambled Sobol
-    points, scipy.stats.qmc, seeded); `cases` is the number of random or Sobol cases.
+    points, scipy.stats.qmc, seeded; NotAvailable where SciPy is older than 1.7); `cases` is the
+    number of random or Sobol cases.
     """
     if not ranges:
         raise ValueError("a sweep needs at least one key to vary")
@@ -118,8 +159,7 @@ def design(ranges, kind="grid", cases=None, seed=0):
     if kind == "random":
         unit = np.random.default_rng(seed).random((int(cases), len(keys)))
     else:
-        from scipy.stats import qmc
-
+        qmc = _sobol_engine()
         sampler = qmc.Sobol(d=len(keys), scramble=True, seed=seed)
         m = math.log2(cases)
         with warnings.catch_warnings():  # the balance of n != 2^m points: the command line says it in one line
@@ -153,9 +193,9 @@ def _progress_bar(total, enabled):
 
 def _client(scheduler):
     """(client, whether this call made it): a distributed.Client, or one connected to the address
-    within CONNECT_TIMEOUT. ConnectionError (an OSError) naming the address if it cannot be reached."""
-    from distributed import Client
-
+    within CONNECT_TIMEOUT. ConnectionError (an OSError) naming the address if it cannot be reached;
+    NotAvailable if Dask is not installed."""
+    Client = _distributed().Client
     if isinstance(scheduler, Client):
         return scheduler, False
     from distributed.comm.addressing import parse_address, parse_host_port
@@ -208,9 +248,10 @@ def run(base, cases, duration=DEFAULT_SETTINGS.duration, sample_rate=DEFAULT_SET
     somewhere in a sweep of C) is a row with outcome "refused" and the core's message.
     scheduler: None for this machine's cores (threads: the core runs without the GIL), or a
     Dask scheduler address or distributed.Client (an address it cannot reach within
-    CONNECT_TIMEOUT raises ConnectionError). workers: local threads (default: every core this
-    process may run on). Zero cases, more than MAX_CASES, or workers or batch_size below 1 raise
-    ValueError naming what is wrong.
+    CONNECT_TIMEOUT raises ConnectionError; without Dask installed, NotAvailable). workers:
+    local threads (default: every core this process may run on). Zero cases, more than
+    MAX_CASES, or workers or batch_size below 1 raise ValueError naming what is wrong. The rows
+    keep base and duration for stability_map.plot where pandas can (set_sweep_info).
     """
     _whole("workers", workers, MAX_WORKERS)
     _whole("batch_size", batch_size)
@@ -272,9 +313,24 @@ def _run(base, columns, count, settings, duration, client, workers, batch_size, 
         parts = [r[name] for r in results]
         frame[name] = np.concatenate([np.asarray(p) for p in parts]) if parts else np.array([])
     rows = pd.DataFrame(frame)
-    rows.attrs["base"] = dict(base)
-    rows.attrs["duration"] = float(duration)
+    set_sweep_info(rows, base, duration)
     return rows
+
+
+def set_sweep_info(rows, base, duration):
+    """Keeps the sweep's base keys and duration with its rows, in DataFrame.attrs (pandas >= 1.0),
+    where stability_map.plot finds them. pandas 0.25 (Ubuntu 20.04) has no attrs: there the rows
+    carry nothing, and plot takes them as its base= and duration= arguments."""
+    if hasattr(type(rows), "attrs"):
+        rows.attrs["base"] = dict(base)
+        rows.attrs["duration"] = float(duration)
+
+
+def sweep_info(rows):
+    """(base keys, duration) kept with the rows by set_sweep_info, or (None, None): pandas < 1.0,
+    or rows that were not returned by run (read back from a CSV file)."""
+    attrs = rows.attrs if hasattr(type(rows), "attrs") else {}
+    return attrs.get("base"), attrs.get("duration")
 
 
 def _parquet_engine():
@@ -289,8 +345,10 @@ def _parquet_engine():
 
 
 def _row_bytes(rows, fmt):
-    if fmt == "parquet":
-        return rows.to_parquet(None, index=False)
+    if fmt == "parquet":  # into a buffer: pandas < 1.2 returns no bytes for a path of None
+        buffer = io.BytesIO()
+        rows.to_parquet(buffer, index=False)
+        return buffer.getvalue()
     return rows.to_csv(index=False).encode()
 
 
@@ -441,7 +499,8 @@ def main(argv=None):
     parser.add_argument("--vary", action="append", default=[], metavar="KEY=SPEC", required=True,
                         help="a key to vary, once per key: LOW:HIGH:N (grid axis), LOW:HIGH (random, sobol) or "
                              f"V1,V2,... (grid); at most {MAX_CASES:.0e} cases")
-    parser.add_argument("--design", choices=["grid", "random", "sobol"], default="grid")
+    parser.add_argument("--design", choices=["grid", "random", "sobol"], default="grid",
+                        help="grid (default), random, or sobol (needs SciPy >= 1.7)")
     parser.add_argument("--cases", type=_cli.whole_number(1), help="number of cases of a random or sobol design")
     parser.add_argument("--seed", type=_cli.whole_number(0), help="seed of a random or sobol design (default 0)")
     parser.add_argument("--duration", type=float, default=DEFAULT_SETTINGS.duration,
@@ -459,7 +518,8 @@ def main(argv=None):
                         "event_time; e.g. final_tilt, max_hop_height, lift_offs)")
     parser.add_argument("--x", help="with --plot: key on the map's x axis (default: the first --vary)")
     parser.add_argument("--y", help="with --plot: key on the map's y axis (default: the second --vary)")
-    parser.add_argument("--scheduler", help="Dask scheduler address (tcp://host:8786); default: this machine's cores")
+    parser.add_argument("--scheduler", help="Dask scheduler address (tcp://host:8786); default: this machine's cores. "
+                        f"Needs Dask ({DASK_INSTALL})")
     parser.add_argument("--workers", type=_cli.whole_number(1, MAX_WORKERS),
                         help=f"local threads (default: every core; at most {MAX_WORKERS})")
     parser.add_argument("--batch-size", type=_cli.whole_number(1),
@@ -475,6 +535,17 @@ def main(argv=None):
         _check_outputs(args)
     except _cli.UsageError as error:
         return fail(error)
+    # Optional modules, refused before any work: Dask for a scheduler, SciPy's qmc for Sobol points.
+    if args.scheduler is not None:
+        try:
+            _distributed()
+        except NotAvailable as error:
+            return fail(f"--scheduler: {error}")
+    if args.design == "sobol":
+        try:
+            _sobol_engine()
+        except NotAvailable as error:
+            return fail(f"--design: {error}")
     try:
         file_keys = dict(_core.read_scene_file(args.config))
     except (ValueError, OSError) as error:  # SceneFileError is a ValueError
@@ -541,7 +612,7 @@ def main(argv=None):
         from spinning_top import stability_map
 
         try:
-            stability_map.plot(rows, x, y, args.plot, value=value)
+            stability_map.plot(rows, x, y, args.plot, value=value, base=base, duration=settings.duration)
         except ValueError as error:
             status = fail(f"--plot: {error}")
     summary = rows["outcome"].value_counts().to_dict()
