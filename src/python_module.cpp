@@ -94,7 +94,7 @@ const StateField kStateFields[] = {
 py::array text_column(const std::vector<const char*>& texts) {
   py::list list;
   for (const char* text : texts) list.append(py::str(text));
-  return py::module_::import("numpy").attr("array")(list, py::arg("dtype") = "str");
+  return py::module::import("numpy").attr("array")(list, py::arg("dtype") = "str");
 }
 
 py::dict snapshot_dict(const Snapshot& s) {
