@@ -13,8 +13,8 @@ def displays(name):
 
 
 @pytest.mark.parametrize("name, marker_topics, hidden_frames", [
-    ("spinning_top.rviz", {"/spinning_top/markers"}, {"contact"}),
-    ("two_tops.rviz", {"/spinning_top/slow/markers", "/spinning_top/fast/markers"}, {"slow/contact", "fast/contact"}),
+    ("spinning_top.rviz", {"markers"}, {"contact"}),
+    ("two_tops.rviz", {"slow/markers", "fast/markers"}, {"slow/contact", "fast/contact"}),
 ])
 def test_config_loads_and_shows_the_node(name, marker_topics, hidden_frames):
     shown = displays(name)
