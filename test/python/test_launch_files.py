@@ -92,7 +92,8 @@ def rviz_topics(name):
 @pytest.mark.parametrize("launch, config, expected", [
     ("spinning_top.launch", "spinning_top.rviz",
      {"/r1/spinning_top/markers", "/r1/spinning_top/normal_force", "/r1/spinning_top/robot_description"}),
-    ("two_tops.launch", "two_tops.rviz", {"/r1/spinning_top/slow/markers", "/r1/spinning_top/fast/markers"}),
+    ("two_tops.launch", "two_tops.rviz", {f"/r1/spinning_top/{top}/{topic}" for top in ("slow", "fast")
+                                          for topic in ("markers", "normal_force")}),
 ])
 def test_rviz_shows_the_node_under_a_namespace(launch, config, expected):
     """Item 3: the configs' names are relative and rviz starts in the node's namespace, so that
