@@ -43,7 +43,7 @@ BodyShape body_shape(const TopParameters& top) {
   return {std::max(height, 1e-3), radius};
 }
 
-double label_height(const BodyShape& shape) { return std::max(0.3 * shape.height, 0.005); }
+double label_height(const BodyShape& shape) { return std::max(0.4 * shape.height, 0.005); }
 
 }  // namespace
 
@@ -95,9 +95,9 @@ visualization_msgs::MarkerArray top_markers(const TopParameters& top, const Vect
   handle.color = color(0.3f, 0.3f, 0.35f);
   array.markers.push_back(handle);
   // The top's label: its body frame's name ("top", "slow/top", ...) above the handle, outside the
-  // cone (the TF display's name sat at G, inside it). Text of 0.3 body heights (8 mm for the
-  // shipped top: 17 px high in two_tops.rviz's view at 0.4 m, 38 px at spinning_top.rviz's
-  // 0.18 m), floored at 5 mm so that a small top's label still reads.
+  // cone (the TF display's name sat at G, inside it). Capitals 0.4 body heights tall (11 mm for
+  // the shipped top: about 14 px for the far top of two_tops.rviz's view, where the TF names
+  // were 8 px), at least 5 mm so that a small top's label still reads.
   visualization_msgs::Marker label = handle;
   label.ns = "label";
   label.id = 0;
