@@ -43,6 +43,8 @@ BodyShape body_shape(const TopParameters& top) {
   return {std::max(height, 1e-3), radius};
 }
 
+double label_height(const BodyShape& shape) { return std::max(0.4 * shape.height, 0.005); }
+
 }  // namespace
 
 visualization_msgs::MarkerArray top_markers(const TopParameters& top, const Vector3& contact_point,
@@ -92,6 +94,20 @@ visualization_msgs::MarkerArray top_markers(const TopParameters& top, const Vect
   handle.pose.position.z = base_z + 0.5 * handle.scale.z;
   handle.color = color(0.3f, 0.3f, 0.35f);
   array.markers.push_back(handle);
+  // The top's label: its body frame's name ("top", "slow/top", ...) above the handle, outside the
+  // cone (the TF display's name sat at G, inside it). Capitals 0.4 body heights tall (11 mm for
+  // the shipped top: about 14 px for the far top of two_tops.rviz's view, where the TF names
+  // were 8 px), at least 5 mm so that a small top's label still reads.
+  visualization_msgs::Marker label = handle;
+  label.ns = "label";
+  label.id = 0;
+  label.type = visualization_msgs::Marker::TEXT_VIEW_FACING;
+  label.text = frames.body;
+  label.scale.x = label.scale.y = 0.0;  // unused by text
+  label.scale.z = label_height(shape);
+  label.pose.position.z = base_z + handle.scale.z + label.scale.z;
+  label.color = color(1.0f, 1.0f, 1.0f);
+  array.markers.push_back(label);
 
   // The tip's trace on the floor (world frame, bounded).
   visualization_msgs::Marker trace;

@@ -167,9 +167,9 @@ SpinningTopNode::SpinningTopNode(ros::NodeHandle nh, ros::NodeHandle private_nh)
   write_back(node_keys);
 
   // A /clock subscriber (every sim-time node) may fall behind by a few callbacks at 1 kHz.
-  if (settings_.publish_clock) clock_publisher_ = nh_.advertise<rosgraph_msgs::Clock>("/clock", 100);
+  if (settings_.publish_clock) clock_publisher_ = nh_.advertise<rosgraph_msgs::Clock>("/clock", 1000);
   status_publisher_ = private_nh_.advertise<std_msgs::String>("status", 1, /*latch=*/true);
-  tf_publisher_ = nh_.advertise<tf2_msgs::TFMessage>("/tf", 100);
+  tf_publisher_ = nh_.advertise<tf2_msgs::TFMessage>("/tf", 1000);
   static_publisher_ = nh_.advertise<tf2_msgs::TFMessage>("/tf_static", 100, /*latch=*/true);
   diagnostics_ = std::make_unique<diagnostic_updater::Updater>(nh_, private_nh_);
   diagnostics_->setHardwareID("spinning_top/" + std::string(to_string(configs.front().second.scene)));

@@ -88,10 +88,10 @@ TopInstance::TopInstance(std::string name, const SceneConfig& config, const Eige
         topic, queue, [listeners, count](const ros::SingleSubscriberPublisher&) { ++((*listeners).*count); },
         [listeners, count](const ros::SingleSubscriberPublisher&) { --((*listeners).*count); });
   };
-  contact_point_publisher_ = counted("contact_point", 100, &Listeners::contact_point, geometry_msgs::PointStamped());
-  normal_force_publisher_ = counted("normal_force", 100, &Listeners::normal_force, geometry_msgs::WrenchStamped());
-  twist_publisher_ = counted("twist", 100, &Listeners::twist, geometry_msgs::TwistStamped());
-  state_publisher_ = counted("state", 100, &Listeners::state, spinning_top::TopState());
+  contact_point_publisher_ = counted("contact_point", 1000, &Listeners::contact_point, geometry_msgs::PointStamped());
+  normal_force_publisher_ = counted("normal_force", 1000, &Listeners::normal_force, geometry_msgs::WrenchStamped());
+  twist_publisher_ = counted("twist", 1000, &Listeners::twist, geometry_msgs::TwistStamped());
+  state_publisher_ = counted("state", 1000, &Listeners::state, spinning_top::TopState());
   marker_publisher_ = counted("markers", 10, &Listeners::markers, visualization_msgs::MarkerArray());
   // Several events can come within one tick (a landing and the lift-off at the same instant):
   // a queue, so that a subscriber gets each; latched, a late one gets the last.
