@@ -146,17 +146,25 @@ def read_bag(path, topics, fields, show_path):
     try:
         with rosbag.Bag(path) as bag:
             found = bag.get_type_and_topic_info().topics
+            # rosbag record keeps a topic's name as it was given: the launch file's recorder names
+            # the node's topics relatively (spinning_top/state), so that it works under a
+            # namespace. A requested topic matches its stored name with or without the leading '/'.
+            stored = {}
             for topic in topics:
-                if topic in found and found[topic].msg_type != TopState._type:
+                bare = topic.lstrip("/")
+                stored[topic] = next((name for name in (topic, bare, "/" + bare) if name in found), topic)
+            requested = {name: topic for topic, name in stored.items()}
+            for topic, name in stored.items():
+                if name in found and found[name].msg_type != TopState._type:
                     raise _cli.UsageError(f"--topic {_cli.short(topic, quote=False)}",
-                                          f"holds {found[topic].msg_type} messages in the bag, not {TopState._type}")
+                                          f"holds {found[name].msg_type} messages in the bag, not {TopState._type}")
             checked = {TopState._md5sum}
-            for topic, message, _ in bag.read_messages(topics=list(topics)):
+            for name, message, _ in bag.read_messages(topics=list(requested)):
                 if message._md5sum not in checked:  # recorded with another definition of TopState
                     for field in fields:
                         check_field(type(message), field)
                     checked.add(message._md5sum)
-                series[topic].add(message)
+                series[requested[name]].add(message)
     except _cli.UsageError:
         raise
     except rosbag.ROSBagException as error:  # not a bag, or a damaged one

@@ -174,3 +174,22 @@ def test_a_write_cut_short_leaves_no_partial_file(bag, tmp_path):
     assert errors == [f"--output: cannot write '{tmp_path / 'new.png'}': File too large",
                       f"--output: cannot write '{tmp_path / 'old.png'}': File too large (left empty, not half written)"]
     assert os.listdir(tmp_path) == ["old.png"] and (tmp_path / "old.png").read_bytes() == b""
+
+
+def test_reads_a_topic_recorded_by_a_relative_name(tmp_path, capsys, monkeypatch):
+    """The launch file's recorder names the node's topics relatively (spinning_top/state, issue 20:
+    it works under a namespace), and rosbag keeps the name as given: the default --topic
+    /spinning_top/state still finds them, and the series is named as asked."""
+    path = tmp_path / "relative.bag"
+    with rosbag.Bag(str(path), "w") as b:
+        for i in range(5):
+            m = TopState()
+            m.header.stamp = rospy.Time(0, i * 10_000_000)
+            m.tilt = 0.01 * i
+            b.write(TOPIC.lstrip("/"), m, m.header.stamp)
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.delenv("DISPLAY", raising=False)
+    status = plot.main(["--bag", str(path), "--no-show", "--fields", "tilt", "--output", "top.svg"])
+    out, err = capsys.readouterr()
+    assert (status, err) == (0, ""), err
+    assert out.splitlines()[-1] == "plot: wrote top.svg"
