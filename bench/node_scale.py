@@ -11,7 +11,7 @@ count; exit code 0 at SIGINT); the wall times, which depend on the machine, are 
 
 Usage: node_scale.py RESULTS_DIR [--count 1000] [--paused] [--repeat 1]
        (with build/devel/setup.bash sourced; /usr/bin/python3)
-Writes node_scale.md into RESULTS_DIR (appends a section per run).
+Writes node_scale.md into RESULTS_DIR.
 """
 import argparse
 import os
@@ -97,8 +97,8 @@ def main():
         lines.append(f"| {options.count} | {'paused' if options.paused else 'running'} | {first:.1f} | {last:.1f} | "
                      f"{sum(costs):.1f} | {exit_seconds:.2f} | {code} |")
         print(lines[-1], *account, sep="\n  ", flush=True)
-    with open(os.path.join(options.results, "node_scale.md"), "a") as f:
-        f.write(f"\n{time.strftime('%Y-%m-%d %H:%M')}, load {os.getloadavg()[0]:.1f}\n\n"
+    with open(os.path.join(options.results, "node_scale.md"), "w") as f:
+        f.write(f"{time.strftime('%Y-%m-%d %H:%M')}, load {os.getloadavg()[0]:.1f}\n\n"
                 "| tops spawned | node | first 10 % of spawns, median [ms] | last 10 % [ms] | all spawns [s] "
                 "| SIGINT to exit [s] | exit code |\n|---|---|---|---|---|---|---|\n")
         f.write("\n".join(lines) + "\n")

@@ -77,6 +77,15 @@ cmake --build "$SPINNING_TOP_BUILD" --target spinning_top_node -- -j"$(nproc)"
   SPINNING_TOP_NODE="$bin/spinning_top_node" /usr/bin/python3 "$SPINNING_TOP_ROOT/bench/node_load.py" "$results" "${quick[@]}"
 )
 
+echo "bench.sh: the node's CPU as launched against a bare roscpp node beside it (issue 20); spawn and exit with 1000 tops (issue 19)"
+cmake --build "$SPINNING_TOP_BUILD" --target bare_tf_node -- -j"$(nproc)"
+(
+  set +u
+  source "$SPINNING_TOP_BUILD/devel/setup.bash"
+  /usr/bin/python3 "$SPINNING_TOP_ROOT/bench/node_cpu.py" "$results" $([ ${#quick[@]} -gt 0 ] && echo "--window 3 --repeat 1")
+  /usr/bin/python3 "$SPINNING_TOP_ROOT/bench/node_scale.py" "$results" $([ ${#quick[@]} -gt 0 ] && echo "--count 200")
+)
+
 echo "bench.sh: wall-clock lag and pacing diagnostics, quiet and beside two busy loops (issue 19)"
 (
   set +u
