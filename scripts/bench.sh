@@ -64,32 +64,28 @@ echo "bench.sh: CPU per step of the work budget, method by method (issue 19)"
 
 echo "bench.sh: sweep throughput: cases per second per core, a 1e6-case map, Dask's overhead (issue 11)"
 (
-  set +u  # ROS's setup scripts read unset variables
-  source "$SPINNING_TOP_BUILD/devel/setup.bash"
+  spinning_top_source_devel
   /usr/bin/python3 "$SPINNING_TOP_ROOT/bench/sweep_throughput.py" "$results" "${quick[@]}"
 )
 
 echo "bench.sh: the node's CPU at 1 kHz with one and five tops, ticks per second at real-time factor 0 (issue 9)"
 cmake --build "$SPINNING_TOP_BUILD" --target spinning_top_node -- -j"$(nproc)"
 (
-  set +u
-  source "$SPINNING_TOP_BUILD/devel/setup.bash"
+  spinning_top_source_devel
   SPINNING_TOP_NODE="$bin/spinning_top_node" /usr/bin/python3 "$SPINNING_TOP_ROOT/bench/node_load.py" "$results" "${quick[@]}"
 )
 
 echo "bench.sh: the node's CPU as launched against a bare roscpp node beside it (issue 20); spawn and exit with 1000 tops (issue 19)"
 cmake --build "$SPINNING_TOP_BUILD" --target bare_tf_node -- -j"$(nproc)"
 (
-  set +u
-  source "$SPINNING_TOP_BUILD/devel/setup.bash"
+  spinning_top_source_devel
   /usr/bin/python3 "$SPINNING_TOP_ROOT/bench/node_cpu.py" "$results" $([ ${#quick[@]} -gt 0 ] && echo "--window 3 --repeat 1")
   /usr/bin/python3 "$SPINNING_TOP_ROOT/bench/node_scale.py" "$results" $([ ${#quick[@]} -gt 0 ] && echo "--count 200")
 )
 
 echo "bench.sh: wall-clock lag and pacing diagnostics, quiet and beside two busy loops (issue 19)"
 (
-  set +u
-  source "$SPINNING_TOP_BUILD/devel/setup.bash"
+  spinning_top_source_devel
   SPINNING_TOP_NODE="$bin/spinning_top_node" /usr/bin/python3 "$SPINNING_TOP_ROOT/bench/wall_clock_lag.py" "$results" "${quick[@]}"
 )
 

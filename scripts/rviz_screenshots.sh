@@ -19,9 +19,7 @@ if [ -z "${SPINNING_TOP_UNDER_XVFB:-}" ]; then
   exec env SPINNING_TOP_UNDER_XVFB=1 xvfb-run -a -s "-screen 0 1280x800x24" bash "$0" "$@"
 fi
 export LIBGL_ALWAYS_SOFTWARE=1
-set +u  # catkin's setup scripts read unset variables
-source "$SPINNING_TOP_BUILD/devel/setup.bash"
-set -u
+spinning_top_source_devel
 output="$(cd "${1:-$SPINNING_TOP_ROOT/doc}" && pwd)"
 work="$(mktemp -d)"
 export ROS_HOME="$work/ros"
