@@ -20,6 +20,9 @@ class TickClock {
   double time() const { return time_at(ticks_); }
   /// [s] simulated time of the next tick.
   double next_time() const { return time_at(ticks_ + 1); }
+  /// The first tick of the current rate (0, or the tick of the last set_pace()): from it on,
+  /// the time between two ticks is their difference / rate() with one rounding.
+  long rate_since() const { return time_anchor_tick_; }
   /// The next tick is taken: time() becomes next_time().
   void take() { ++ticks_; }
 

@@ -48,6 +48,23 @@ double read_publication_rate(const ros::NodeHandle& nh, const std::string& key, 
   return value;
 }
 
+/// ~publish_clock: true, false or "auto" (also the strings "true" and "false", as a command line
+/// `_publish_clock:=auto` gives text).
+ClockMode read_clock_mode(const ros::NodeHandle& nh, ClockMode value) {
+  XmlRpc::XmlRpcValue given;
+  if (!nh.getParam("publish_clock", given)) return value;
+  if (given.getType() == XmlRpc::XmlRpcValue::TypeBoolean)
+    return static_cast<bool>(given) ? ClockMode::kPublish : ClockMode::kOff;
+  if (given.getType() == XmlRpc::XmlRpcValue::TypeString) {
+    const std::string text = static_cast<std::string>(given);
+    if (text == "auto") return ClockMode::kAuto;
+    if (text == "true") return ClockMode::kPublish;
+    if (text == "false") return ClockMode::kOff;
+    throw InvalidParameter("publish_clock", "'" + excerpt(text) + "' is not auto, true or false");
+  }
+  throw InvalidParameter("publish_clock", "must be auto, true or false");
+}
+
 std::vector<std::string> read_top_names(const ros::NodeHandle& nh) {
   XmlRpc::XmlRpcValue value;
   std::vector<std::string> names;
@@ -84,11 +101,27 @@ std::vector<std::string> read_top_names(const ros::NodeHandle& nh) {
 const std::vector<std::string>& node_setting_keys() {
   static const std::vector<std::string> keys = {
       "rate", "real_time_factor", "max_lag", "tick_budget", "publish_clock", "clock_rate", "tf_rate",
-      "start_paused", "wait_for_subscriber", "world_frame", "body_frame", "contact_frame", "marker_rate", "trace_length",
+      "start_paused", "wait_for_subscriber", "world_frame", "frame_prefix", "body_frame", "contact_frame",
+      "marker_rate", "trace_length",
       "trace_resolution", "force_scale", "energy_drift_warning", "energy_drift_error", "quaternion_norm_error",
       "constraint_error", "late_tick_warning", "real_time_factor_warning", "tops", "reset_reads_parameters",
       "scene_file", "overrides_file"};
   return keys;
+}
+
+std::string frame_prefix_of(const std::string& private_namespace) {
+  const std::size_t last = private_namespace.rfind('/');
+  std::string ns = last == std::string::npos ? "" : private_namespace.substr(0, last);
+  while (!ns.empty() && ns.front() == '/') ns.erase(0, 1);
+  return ns;
+}
+
+std::string top_frame(const NodeSettings& settings, const std::string& top_name, bool body) {
+  const bool explicit_frame = body ? settings.body_frame_explicit : settings.contact_frame_explicit;
+  std::string frame = top_name.empty() ? "" : top_name + "/";
+  frame += body ? settings.body_frame : settings.contact_frame;
+  if (explicit_frame || settings.frame_prefix.empty()) return frame;
+  return settings.frame_prefix + "/" + frame;
 }
 
 void validate_pacing(double rate, double real_time_factor) {
@@ -140,19 +173,25 @@ NodeSettings read_node_settings(const ros::NodeHandle& nh) {
   require(std::isfinite(s.tick_budget) && s.tick_budget >= 1e-4 && s.tick_budget <= 1.0, "tick_budget",
           "must lie in [1e-4, 1] s (the wall time one callback may integrate before the node serves "
           "services, parameter updates and SIGINT again)");
-  s.publish_clock = read_bool(nh, "publish_clock", s.publish_clock);
+  s.publish_clock = read_clock_mode(nh, s.publish_clock);
   s.clock_rate = read_publication_rate(nh, "clock_rate", s.clock_rate);
   s.tf_rate = read_publication_rate(nh, "tf_rate", s.tf_rate);
   s.start_paused = read_bool(nh, "start_paused", s.start_paused);
   s.wait_for_subscriber = read_bool(nh, "wait_for_subscriber", s.wait_for_subscriber);
   s.world_frame = read_string(nh, "world_frame", s.world_frame);
+  s.frame_prefix = read_string(nh, "frame_prefix", frame_prefix_of(nh.getNamespace()));
+  s.body_frame_explicit = nh.hasParam("body_frame");
+  s.contact_frame_explicit = nh.hasParam("contact_frame");
   s.body_frame = read_string(nh, "body_frame", s.body_frame);
   s.contact_frame = read_string(nh, "contact_frame", s.contact_frame);
   require_frame("world_frame", s.world_frame);
+  if (!s.frame_prefix.empty()) require_frame("frame_prefix", s.frame_prefix);  // "": no prefix
   require_frame("body_frame", s.body_frame);
   require_frame("contact_frame", s.contact_frame);
-  require(s.body_frame != s.world_frame && s.contact_frame != s.world_frame && s.contact_frame != s.body_frame,
-          "body_frame", "world_frame, body_frame and contact_frame must differ");
+  const std::string body = top_frame(s, "", true), contact = top_frame(s, "", false);
+  require(body != s.world_frame && contact != s.world_frame && contact != body, "body_frame",
+          "world_frame, body_frame and contact_frame must differ (now " + excerpt(s.world_frame) + ", " +
+              excerpt(body) + ", " + excerpt(contact) + ")");
   s.marker_rate = read_number(nh, "marker_rate", s.marker_rate);
   require(std::isfinite(s.marker_rate) && s.marker_rate > 0.0, "marker_rate", "must be > 0 Hz");
   const double trace_length = read_number(nh, "trace_length", s.trace_length);

@@ -142,6 +142,38 @@ InvalidParameter blame(const InvalidParameter& error, const std::vector<std::str
 }
 
 
+/// The publishers of /clock in the master's order of registration (getSystemState: rosmaster
+/// appends each new publisher of a topic to its list); false if the master did not answer.
+bool clock_publishers(std::vector<std::string>& publishers) {
+  publishers.clear();
+  XmlRpc::XmlRpcValue request, response, payload;
+  request[0] = ros::this_node::getName();
+  if (!ros::master::execute("getSystemState", request, response, payload, false)) return false;
+  if (payload.getType() != XmlRpc::XmlRpcValue::TypeArray || payload.size() < 1) return false;
+  const std::string clock = ros::names::resolve("/clock");
+  XmlRpc::XmlRpcValue& topics = payload[0];
+  if (topics.getType() != XmlRpc::XmlRpcValue::TypeArray) return false;
+  for (int i = 0; i < topics.size(); ++i) {
+    XmlRpc::XmlRpcValue& entry = topics[i];
+    if (entry.getType() != XmlRpc::XmlRpcValue::TypeArray || entry.size() < 2 ||
+        entry[0].getType() != XmlRpc::XmlRpcValue::TypeString || static_cast<std::string>(entry[0]) != clock)
+      continue;
+    XmlRpc::XmlRpcValue& nodes = entry[1];
+    if (nodes.getType() != XmlRpc::XmlRpcValue::TypeArray) return false;
+    for (int j = 0; j < nodes.size(); ++j)
+      if (nodes[j].getType() == XmlRpc::XmlRpcValue::TypeString) publishers.push_back(static_cast<std::string>(nodes[j]));
+  }
+  return true;
+}
+
+/// Whether a node is a spinning_top node whose ~publish_clock is auto (it writes "auto" there
+/// at start when the key is not set), which gives way to the first registered one of its kind.
+bool yields_clock(const std::string& node) {
+  XmlRpc::XmlRpcValue value;
+  return ros::param::get(node + "/publish_clock", value) && value.getType() == XmlRpc::XmlRpcValue::TypeString &&
+         static_cast<std::string>(value) == "auto";
+}
+
 }  // namespace
 
 SpinningTopNode::SpinningTopNode(ros::NodeHandle nh, ros::NodeHandle private_nh)
@@ -162,12 +194,11 @@ SpinningTopNode::SpinningTopNode(ros::NodeHandle nh, ros::NodeHandle private_nh)
   // 0); otherwise stamps start at the wall time of the start, so that tf users on wall time
   // see current transforms at real_time_factor 1.
   stamp_origin_ = ros::Time::isSimTime() ? ros::Time(0, 0) : ros::Time::now();
-  last_stamp_ = stamp_origin_;
+  last_stamp_ = stamp_origin_.base;
   stop_if_shutting_down("writing the parameters");
   write_back(node_keys);
 
-  // A /clock subscriber (every sim-time node) may fall behind by a few callbacks at 1 kHz.
-  if (settings_.publish_clock) clock_publisher_ = nh_.advertise<rosgraph_msgs::Clock>("/clock", 1000);
+  start_clock();
   status_publisher_ = private_nh_.advertise<std_msgs::String>("status", 1, /*latch=*/true);
   tf_publisher_ = nh_.advertise<tf2_msgs::TFMessage>("/tf", 1000);
   static_publisher_ = nh_.advertise<tf2_msgs::TFMessage>("/tf_static", 100, /*latch=*/true);
@@ -178,7 +209,7 @@ SpinningTopNode::SpinningTopNode(ros::NodeHandle nh, ros::NodeHandle private_nh)
   for (std::size_t i = 0; i < configs.size(); ++i) {
     stop_if_shutting_down("starting the tops");  // each top advertises its topics and services
     add_top(std::make_unique<TopInstance>(configs[i].first, configs[i].second, positions[i], settings_, private_nh_,
-                                          clock_.time(), stamp_of()));
+                                          clock_.time(), stamp_of(), world_clock()));
   }
   send_static_transforms();
 
@@ -191,6 +222,7 @@ SpinningTopNode::SpinningTopNode(ros::NodeHandle nh, ros::NodeHandle private_nh)
   spawn_service_ = private_nh_.advertiseService("spawn", &SpinningTopNode::on_spawn, this);
   kill_service_ = private_nh_.advertiseService("kill", &SpinningTopNode::on_kill, this);
   set_state_service_ = private_nh_.advertiseService("set_state", &SpinningTopNode::on_set_state, this);
+  get_state_service_ = private_nh_.advertiseService("get_state", &SpinningTopNode::on_get_state, this);
 
   // dynamic_reconfigure starts from the effective values: the node's own keys (those its tops
   // inherit; the scene's documented defaults included) and its pacing. A live key that does not
@@ -236,9 +268,15 @@ SpinningTopNode::SpinningTopNode(ros::NodeHandle nh, ros::NodeHandle private_nh)
   // and the reconfigure server take tens of ms): tick n is due at the wall time it is stamped.
   window_wall_start_ = ros::WallTime::now();
   clock_.anchor(window_wall_start_.toSec());
-  if (!ros::Time::isSimTime()) last_stamp_ = stamp_origin_ = ros::Time(window_wall_start_.sec, window_wall_start_.nsec);
+  if (!ros::Time::isSimTime() && clock_role_ != ClockRole::kFollow)
+    last_stamp_ = (stamp_origin_ = ros::Time(window_wall_start_.sec, window_wall_start_.nsec)).base;
   restart_timer();
+  if (clock_role_ == ClockRole::kFollow) timer_.stop();  // the external /clock drives the ticks
   diagnostics_timer_ = nh_.createWallTimer(ros::WallDuration(1.0), &SpinningTopNode::on_diagnostics_timer, this);
+  if (settings_.publish_clock == ClockMode::kAuto) {
+    clock_role_timer_ = nh_.createWallTimer(ros::WallDuration(1.0), &SpinningTopNode::on_clock_role_timer, this);
+    clock_arbiter_ = std::thread(&SpinningTopNode::clock_arbiter_loop, this);
+  }
   if (tops_.size() <= 10) {  // with more, one line for all
     for (const auto& top : tops_)
       ROS_INFO("spinning_top: %s%sscene %s, integrator %s", top->name().c_str(), top->name().empty() ? "" : ": ",
@@ -249,6 +287,15 @@ SpinningTopNode::SpinningTopNode(ros::NodeHandle nh, ros::NodeHandle private_nh)
   started_ = 1;
 }
 
+SpinningTopNode::~SpinningTopNode() {
+  {
+    std::lock_guard<std::mutex> lock(arbiter_mutex_);
+    arbiter_stop_ = true;
+  }
+  arbiter_wake_.notify_all();
+  if (clock_arbiter_.joinable()) clock_arbiter_.join();
+}
+
 volatile std::sig_atomic_t SpinningTopNode::stop_requested_ = 0;
 volatile std::sig_atomic_t SpinningTopNode::started_ = 0;
 
@@ -257,6 +304,211 @@ void SpinningTopNode::stop_if_shutting_down(const char* step) {
   // Unwinding destroys every publisher made so far: after the shutdown that costs nothing.
   ros::shutdown();
   throw StartupInterrupted(std::string("shut down while ") + step);
+}
+
+SpinningTopNode::ClockVerdict SpinningTopNode::judge_clock(const std::vector<std::string>& publishers) {
+  const std::string me = ros::this_node::getName();
+  std::vector<std::string> others;
+  for (const std::string& node : publishers)
+    if (node != me) others.push_back(node);
+  ClockVerdict verdict;
+  if (others.empty()) return verdict;  // nobody else: ours
+  verdict.publish = false;
+  // A clock that never gives way (rosbag play --clock, Gazebo, ~publish_clock true) is followed.
+  for (const std::string& node : others)
+    if (!yields_clock(node)) {
+      verdict.source = node;
+      return verdict;
+    }
+  // Only auto nodes: the first registered keeps publishing (all of them read the same list).
+  const bool registered = others.size() < publishers.size();
+  verdict.source = registered ? publishers.front() : others.front();
+  verdict.publish = verdict.source == me;
+  if (verdict.publish) verdict.source.clear();
+  return verdict;
+}
+
+void SpinningTopNode::start_clock() {
+  if (settings_.publish_clock == ClockMode::kOff) {
+    clock_role_ = ClockRole::kOwnPace;
+    return;
+  }
+  if (settings_.publish_clock == ClockMode::kPublish) {
+    // A /clock subscriber (every sim-time node) may fall behind by a few callbacks at 1 kHz.
+    clock_publisher_ = nh_.advertise<rosgraph_msgs::Clock>("/clock", 1000);
+    clock_role_ = ClockRole::kPublish;
+    return;
+  }
+  // auto. The mark by which other auto nodes know this one gives way (judge_clock).
+  if (!private_nh_.hasParam("publish_clock")) private_nh_.setParam("publish_clock", std::string("auto"));
+  std::vector<std::string> publishers;
+  if (clock_publishers(publishers) && !publishers.empty()) {
+    const ClockVerdict verdict = judge_clock(publishers);  // we are not registered: never ours
+    return follow_clock(verdict.source, "it publishes /clock");
+  }
+  // Nobody publishes /clock: advertise it and look again before the first tick. Two nodes that
+  // started together may both be here; the master's list orders them alike for both.
+  clock_publisher_ = nh_.advertise<rosgraph_msgs::Clock>("/clock", 1000);
+  clock_role_ = ClockRole::kPublish;
+  if (!clock_publishers(publishers)) return;
+  const ClockVerdict verdict = judge_clock(publishers);
+  if (verdict.publish) {
+    ROS_INFO("spinning_top: no other node publishes /clock: publishing it (~publish_clock auto)");
+    return;
+  }
+  follow_clock(verdict.source, "it registered /clock first");
+}
+
+void SpinningTopNode::clock_arbiter_loop() {
+  std::unique_lock<std::mutex> lock(arbiter_mutex_);
+  // Every second; on a large graph (getSystemState lists every topic: 0.13 s for the 7,000 topics
+  // of 1,000 tops) 50 times as long as the master took, so that asking costs it at most 2 %.
+  std::chrono::duration<double> interval(1.0);
+  while (!arbiter_stop_) {
+    arbiter_wake_.wait_for(lock, interval, [this] { return arbiter_stop_; });
+    if (arbiter_stop_) break;
+    lock.unlock();  // the master calls without the lock
+    const auto asked = std::chrono::steady_clock::now();
+    std::vector<std::string> publishers;
+    const bool answered = ros::ok() && clock_publishers(publishers);
+    ClockVerdict verdict;
+    if (answered) verdict = judge_clock(publishers);
+    const std::chrono::duration<double> took = std::chrono::steady_clock::now() - asked;
+    interval = std::max(std::chrono::duration<double>(1.0), 50.0 * took);
+    lock.lock();
+    if (answered) {
+      verdict_ = verdict;
+      verdict_ready_ = true;
+    }
+  }
+}
+
+void SpinningTopNode::on_clock_role_timer(const ros::WallTimerEvent&) {
+  ClockVerdict verdict;
+  {
+    std::lock_guard<std::mutex> lock(arbiter_mutex_);
+    if (!verdict_ready_) return;
+    verdict_ready_ = false;
+    verdict = verdict_;
+  }
+  if (verdict.publish && clock_role_ == ClockRole::kFollow) {
+    ++clock_role_changes_;
+    publish_own_clock("nobody else publishes /clock (" + clock_source_ + " stopped)");
+  } else if (!verdict.publish && clock_role_ == ClockRole::kPublish) {
+    ++clock_role_changes_;
+    follow_clock(verdict.source, "it publishes /clock too");
+  } else if (!verdict.publish && verdict.source != clock_source_) {
+    ++clock_role_changes_;
+    follow_clock(verdict.source, "it publishes /clock now");
+  }
+}
+
+void SpinningTopNode::publish_own_clock(const std::string& why) {
+  clock_subscriber_.shutdown();
+  clock_publisher_ = nh_.advertise<rosgraph_msgs::Clock>("/clock", 1000);
+  clock_role_ = ClockRole::kPublish;
+  const std::string previous = clock_source_;
+  clock_source_.clear();
+  // Another follower of the same clock may take over at the same time: as at the start, the
+  // master's list decides at once (the first registered auto node keeps publishing).
+  std::vector<std::string> publishers;
+  if (clock_publishers(publishers)) {
+    const ClockVerdict verdict = judge_clock(publishers);
+    if (!verdict.publish) return follow_clock(verdict.source, "it took over the /clock of " + previous + " first");
+  }
+  // Our /clock goes on from the time followed: stamps and /clock continue, paced by the wall clock.
+  if (external_anchored_) anchor_stamps(std::max(external_time_, last_stamp_));
+  external_anchored_ = false;
+  clock_.anchor(ros::WallTime::now().toSec());
+  restart_timer();
+  timer_.start();
+  ROS_WARN("spinning_top: %s: publishing /clock from %.9f s on (~publish_clock auto)", why.c_str(),
+           stamp_at(clock_.next_time()).toSec());
+}
+
+void SpinningTopNode::follow_clock(const std::string& source, const std::string& why) {
+  if (clock_publisher_) clock_publisher_.shutdown();  // unregistered: the master lists one publisher
+  clock_publisher_ = ros::Publisher();
+  clock_role_ = ClockRole::kFollow;
+  clock_source_ = source;
+  external_anchored_ = false;  // the next /clock message anchors the stamps
+  if (!clock_subscriber_)
+    clock_subscriber_ = nh_.subscribe("/clock", 100, &SpinningTopNode::on_clock, this, ros::TransportHints().tcpNoDelay());
+  if (timer_.isValid()) timer_.stop();
+  ROS_INFO("spinning_top: following the /clock of %s (%s): the tops advance in ticks of 1/rate to its time, "
+           "stamped with it; this node does not publish /clock (~publish_clock auto)",
+           source.c_str(), why.c_str());
+}
+
+void SpinningTopNode::anchor_stamps(const ros::Time& stamp) {
+  stamp_origin_.base = stamp;
+  stamp_origin_.world_base = clock_.time();
+}
+
+void SpinningTopNode::on_clock(const rosgraph_msgs::Clock::ConstPtr& message) {
+  if (clock_role_ != ClockRole::kFollow) return;
+  const ros::Time now = message->clock;
+  external_wall_ = ros::WallTime::now();
+  if (!external_anchored_ || now < external_time_) {
+    if (external_anchored_) {
+      ++external_jumps_back_;
+      ROS_WARN("spinning_top: the /clock of %s went back from %.9f s to %.9f s (its source restarted: rosbag "
+               "play --loop, a Gazebo reset?): the tops go on from where they are, stamped on the new time",
+               clock_source_.c_str(), external_time_.toSec(), now.toSec());
+    }
+    // The world's time now is stamped `now`; its next tick one period later. Stamps already sent
+    // beyond it belong to the old time line (tf2 listeners clear their buffers at the jump).
+    anchor_stamps(now);
+    if (last_stamp_ > now) last_stamp_ = now;
+    external_anchored_ = true;
+  }
+  external_time_ = now;
+  if (paused_) return;
+  if (waiting_for_subscriber_) {
+    if (tops_.empty() || !tops_.front()->subscribed()) return;
+    waiting_for_subscriber_ = false;
+    anchor_stamps(now);  // the first tick one period after the subscriber came
+    ROS_INFO("spinning_top: a subscriber is there; the simulation starts");
+  }
+  follow_to(external_wall_);
+}
+
+void SpinningTopNode::follow_to(ros::WallTime start) {
+  if (!external_anchored_ || waiting_for_subscriber_ || paused_) {
+    timer_.stop();
+    return;
+  }
+  // Far behind the external clock (it jumped ahead, or it runs faster than the ticks can be
+  // computed): beyond ~max_lag of its time the ticks are given up, as with the wall clock.
+  const double behind = (external_time_ - stamp_at(clock_.time())).toSec();
+  if (!tick_unfinished_ && behind > settings_.max_lag + 1.0 / settings_.rate) {
+    const long given_up = static_cast<long>(std::floor((behind - settings_.max_lag) * settings_.rate));
+    if (given_up > 0) {
+      given_up_ticks_ += given_up;
+      stamp_origin_ += ros::Duration(static_cast<double>(given_up) / settings_.rate);
+      ROS_WARN_THROTTLE(5.0, "spinning_top: more than ~max_lag = %g s behind the /clock of %s: %ld ticks given up",
+                        settings_.max_lag, clock_source_.c_str(), given_up);
+    }
+  }
+  const ros::WallTime deadline = start + ros::WallDuration(settings_.tick_budget);
+  ros::WallTime now = start;
+  auto* queue = dynamic_cast<NodeCallbackQueue*>(nh_.getCallbackQueue());
+  while (!paused_ && now < deadline) {
+    if (!tick_unfinished_ && stamp_at(clock_.next_time()) > external_time_) break;
+    const bool finished = tick(deadline);
+    const ros::WallTime end = ros::WallTime::now();
+    tick_cost_sum_ += (end - now).toSec();
+    tick_cost_max_ = std::max(tick_cost_max_, (end - now).toSec());
+    now = end;
+    if (!finished) break;
+    ++ticks_in_window_;
+    if (queue != nullptr && queue->others_waiting()) break;  // served between two ticks
+  }
+  const bool backlog = !paused_ && (tick_unfinished_ || stamp_at(clock_.next_time()) <= external_time_);
+  if (backlog)
+    timer_.start();  // goes on at the timer, after what waits in the queue
+  else
+    timer_.stop();
 }
 
 void SpinningTopNode::unregister_at_exit() {
@@ -500,13 +752,15 @@ void SpinningTopNode::restart_timer() {
 void SpinningTopNode::on_timer(const ros::WallTimerEvent&) {
   if (paused_) return;
   const ros::WallTime start = ros::WallTime::now();
+  if (clock_role_ == ClockRole::kFollow) return follow_to(start);  // a backlog of the external clock
   if (waiting_for_subscriber_) {
-    const bool clock_heard = !settings_.publish_clock || clock_publisher_.getNumSubscribers() > 0;
+    const bool clock_heard = clock_role_ != ClockRole::kPublish || clock_publisher_.getNumSubscribers() > 0;
     if (!clock_heard || tops_.empty() || !tops_.front()->subscribed()) return;
     // The first subscriber is there: pacing (and wall-clock stamps) start now, at tick 1.
     waiting_for_subscriber_ = false;
     clock_.anchor(start.toSec());
-    if (!ros::Time::isSimTime()) last_stamp_ = stamp_origin_ = ros::Time(start.sec, start.nsec);
+    if (!ros::Time::isSimTime() && clock_role_ != ClockRole::kFollow)
+      last_stamp_ = (stamp_origin_ = ros::Time(start.sec, start.nsec)).base;
     ROS_INFO("spinning_top: a subscriber is there; the simulation starts");
   }
   // As fast as possible (factor 0): ticks back to back for one slice, then back to the callback
@@ -577,7 +831,7 @@ bool SpinningTopNode::tick(ros::WallTime deadline) {
     return false;
   }
   if (events_after != events_before && diagnostics_) diagnostics_->force_update();
-  const ros::Time stamp = stamp_origin_ + ros::Duration(world_time);
+  const ros::Time stamp = stamp_at(world_time);
   if (stamp <= last_stamp_) return true;  // never twice the same stamp (tf2 TF_REPEATED_DATA)
   last_stamp_ = stamp;
   publish(stamp);
@@ -586,7 +840,7 @@ bool SpinningTopNode::tick(ros::WallTime deadline) {
 
 void SpinningTopNode::publish(const ros::Time& stamp) {
   const long tick = clock_.ticks();
-  if (settings_.publish_clock && tick % ticks_per_clock_ == 0) {
+  if (clock_role_ == ClockRole::kPublish && tick % ticks_per_clock_ == 0) {
     rosgraph_msgs::Clock clock;
     clock.clock = stamp;
     clock_publisher_.publish(clock);
@@ -626,11 +880,14 @@ void SpinningTopNode::diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat
 
   status.summary(DiagnosticStatus::OK, paused_ ? "paused" : "running");
   // Pacing: a single late tick is normal on a shared machine (it is taken, late); a sustained
-  // fraction of them, a real-time factor below the threshold or ticks given up are not.
-  if (!paused_ && late_fraction > settings_.late_tick_warning)
+  // fraction of them, a real-time factor below the threshold or ticks given up are not. A node
+  // following an external /clock goes at its pace, whatever the requested real-time factor.
+  const bool following = clock_role_ == ClockRole::kFollow;
+  if (!paused_ && !following && late_fraction > settings_.late_tick_warning)
     status.mergeSummaryf(DiagnosticStatus::WARN, "%.0f%% of the ticks late in the last %.1f s", 100.0 * late_fraction,
                          wall);
-  if (!paused_ && requested > 0.0 && wall >= 0.5 && achieved_rtf < settings_.real_time_factor_warning * requested)
+  if (!paused_ && !following && requested > 0.0 && wall >= 0.5 &&
+      achieved_rtf < settings_.real_time_factor_warning * requested)
     status.mergeSummaryf(DiagnosticStatus::WARN, "real-time factor %.3f of %g requested", achieved_rtf, requested);
   if (given_up_in_window > 0)
     status.mergeSummaryf(DiagnosticStatus::WARN, "%ld ticks given up beyond ~max_lag = %g s", given_up_in_window,
@@ -641,6 +898,16 @@ void SpinningTopNode::diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat
   // The node's own top reports here, as it always has; named tops have a status of their own.
   if (TopInstance* own = find_top("")) own->diagnose(status);
   status.add("tops", static_cast<int>(tops_.size()));
+  status.add("clock", clock_role_ == ClockRole::kPublish ? std::string("publishes /clock")
+                      : following ? "follows the /clock of " + clock_source_
+                                  : std::string("own pace, /clock not published (~publish_clock false)"));
+  if (following) {
+    status.addf("external clock [s]", "%.9f", external_time_.toSec());
+    status.addf("external clock last heard [wall s ago]", "%.3f",
+                external_anchored_ ? (now - external_wall_).toSec() : -1.0);
+    status.add("external clock jumps back", external_jumps_back_);
+  }
+  status.add("clock role changes", clock_role_changes_);
   status.addf("world time [s]", "%.9g", clock_.time());
   status.addf("rate [Hz]", "%g", settings_.rate);
   status.addf("requested real-time factor", "%g", requested);
@@ -805,8 +1072,7 @@ bool SpinningTopNode::on_reset(std_srvs::Trigger::Request& request, std_srvs::Tr
   send_static_transforms();
   response.success = true;
   response.message = "reset to the initial state; simulated time 0 is stamped " +
-                     format("%.9f", (stamp_origin_ + ros::Duration(clock_.time())).toSec()) +
-                     (paused_ ? " (still paused)" : "");
+                     format("%.9f", stamp_at(clock_.time()).toSec()) + (paused_ ? " (still paused)" : "");
   ROS_INFO("spinning_top: %s", response.message.c_str());
   return true;
 }
@@ -865,7 +1131,11 @@ bool SpinningTopNode::on_resume(std_srvs::Trigger::Request&, std_srvs::Trigger::
   response.success = true;
   response.message = paused_ ? format("resumed at t = %.9g s", clock_.time()) : "already running";
   if (paused_) clock_.anchor(ros::WallTime::now().toSec());  // the pause is not made up for
+  // Following a clock: the next tick one period after the external time now.
+  if (paused_ && clock_role_ == ClockRole::kFollow && external_anchored_)
+    anchor_stamps(std::max(external_time_, last_stamp_));
   paused_ = false;
+  if (clock_role_ == ClockRole::kFollow) follow_to(ros::WallTime::now());
   return true;
 }
 
@@ -875,6 +1145,10 @@ bool SpinningTopNode::on_step(std_srvs::Trigger::Request&, std_srvs::Trigger::Re
     response.message = "~step advances one tick while paused: call ~pause first";
     return true;
   }
+  // Following a clock: the step is stamped one period after the external time now (or after
+  // the last stamp), not where the pause left the stamps.
+  if (clock_role_ == ClockRole::kFollow && external_anchored_ && !tick_unfinished_)
+    anchor_stamps(std::max(external_time_, last_stamp_));
   if (!tick(ros::WallTime::now() + ros::WallDuration(settings_.tick_budget))) {
     response.success = false;
     response.message = format("the tick needs more than its ~tick_budget of %g s", settings_.tick_budget) +
@@ -928,7 +1202,7 @@ bool SpinningTopNode::on_spawn(Spawn::Request& request, Spawn::Response& respons
     }
     const SceneConfig config = parse_scene_config(keys, /*require_all=*/false);
     add_top(std::make_unique<TopInstance>(request.name, config, Eigen::Vector2d(request.x, request.y), settings_,
-                                          private_nh_, clock_.time(), stamp_of()));
+                                          private_nh_, clock_.time(), stamp_of(), world_clock()));
   } catch (const InvalidParameter& error) {
     response.message = std::string("spawn refused: ") + error.what();
     ROS_WARN("spinning_top: %s", response.message.c_str());
@@ -991,8 +1265,40 @@ bool SpinningTopNode::on_set_state(SetState::Request& request, SetState::Respons
   }
   send_static_transforms();
   response.success = true;
-  response.message = format("state set; the top's simulated time 0 is stamped %.9f",
-                            (stamp_origin_ + ros::Duration(clock_.time())).toSec());
+  response.message = format("state set; the top's simulated time 0 is stamped %.9f", stamp_at(clock_.time()).toSec());
+  return true;
+}
+
+bool SpinningTopNode::on_get_state(GetState::Request& request, GetState::Response& response) {
+  // "" is the node's own top, or the only top when it has one named top.
+  TopInstance* top = find_top(request.name);
+  if (top == nullptr && request.name.empty() && tops_.size() == 1) top = tops_.front().get();
+  response.success = false;
+  if (top == nullptr) {
+    response.message = "get_state: name: no top named '" + excerpt(request.name) + "'";
+    return true;
+  }
+  SettableState state;
+  try {
+    state = top->settable_state();
+  } catch (const InvalidParameter& error) {
+    response.message = std::string("get_state: ") + error.what() + (top->name().empty() ? "" : " (top " + top->name() + ")");
+    return true;
+  }
+  response.time = top->time();
+  response.tilt = state.initial.tilt;
+  response.heading = state.initial.heading;
+  response.spin_angle = state.initial.spin_angle;
+  response.precession_rate = state.initial.precession_rate;
+  response.nutation_rate = state.initial.nutation_rate;
+  response.spin = state.initial.spin;
+  response.velocity_x = state.initial.velocity_x;
+  response.velocity_y = state.initial.velocity_y;
+  response.x = state.tip.x();
+  response.y = state.tip.y();
+  response.success = true;
+  response.message = format("state at t = %.17g s", response.time) +
+                     format(" (stamped %.9f); ~set_state sets it back", stamp_at(clock_.time()).toSec());
   return true;
 }
 

@@ -71,12 +71,13 @@ Snapshot at_rest(Snapshot s) {
 
 TopInstance::TopInstance(std::string name, const SceneConfig& config, const Eigen::Vector2d& tip_xy,
                          const NodeSettings& settings, ros::NodeHandle private_nh, double world_time,
-                         StampOf stamp_of)
+                         StampOf stamp_of, WorldClock world_clock)
     : name_(std::move(name)),
       settings_(settings),
-      body_frame_(name_.empty() ? settings.body_frame : name_ + "/" + settings.body_frame),
-      contact_frame_(name_.empty() ? settings.contact_frame : name_ + "/" + settings.contact_frame),
+      body_frame_(top_frame(settings, name_, true)),
+      contact_frame_(top_frame(settings, name_, false)),
       stamp_of_(std::move(stamp_of)),
+      world_clock_(std::move(world_clock)),
       nh_(name_.empty() ? private_nh : ros::NodeHandle(private_nh, name_)) {
   restart(config, tip_xy, world_time);  // validates before anything is advertised
   // Each per-tick topic with its count of subscribers (Listeners): the callbacks hold the counts,
@@ -115,14 +116,17 @@ std::vector<std::string> TopInstance::advertised_topics() const {
 TopInstance::~TopInstance() = default;
 
 void TopInstance::start(const SceneConfig& config, double time_base, double world_time) {
-  start(make_simulator(config), time_base, world_time);  // validates; throws InvalidParameter
+  const WorldTime now = world_clock_();
+  // validates; throws InvalidParameter. A start at the world's time is at its tick.
+  start(make_simulator(config), time_base, world_time, now.time == world_time ? now.tick : -1);
 }
 
-void TopInstance::start(std::unique_ptr<Simulator> simulator, double time_base, double world_time) {
+void TopInstance::start(std::unique_ptr<Simulator> simulator, double time_base, double world_time, long origin_tick) {
   simulator_ = std::move(simulator);
   start_event_reported_ = false;
   time_base_ = time_base;
   origin_ = world_time;
+  origin_tick_ = origin_tick;
   now_ = simulator_->snapshot();
   pivot_ = now_.outputs.contact_point;
   rebaseline_energy();
@@ -146,6 +150,35 @@ void TopInstance::restart(const SceneConfig& config, const Eigen::Vector2d& tip_
 }
 
 void TopInstance::reset(double world_time) { restart(start_config_, start_tip_xy_, world_time); }
+
+SettableState TopInstance::settable_state() const {
+  if (simulator_->event() != Event::kNone)
+    throw InvalidParameter("name", std::string("the top stopped at its ") + to_string(simulator_->event()) +
+                                       " event: ~set_state cannot start from there (call ~reset)");
+  SettableState state;
+  if (time_base_ == 0.0 && now_.time == 0.0) {
+    // Where it started (start, reset, ~set_state, ~reload), as it was given: the attitude and
+    // rates read back from the quaternion would differ in the last bits.
+    state.initial = start_config_.initial;
+    state.tip = start_tip_xy_;
+    return state;
+  }
+  require_on_the_floor("name");  // ~set_state starts on the floor
+  const EulerState e = euler_state(now_.attitude, now_.body_rates);
+  state.initial.tilt = e.tilt;
+  state.initial.heading = e.heading;
+  state.initial.spin_angle = e.spin_angle;
+  state.initial.precession_rate = e.precession_rate;
+  state.initial.nutation_rate = e.nutation_rate;
+  state.initial.spin = e.spin;
+  state.initial.velocity_x = state.initial.velocity_y = 0.0;
+  if (start_config_.scene == SceneType::kViscous) {  // as a live body change takes it (prepare_body)
+    state.initial.velocity_x = now_.outputs.center_of_mass_velocity.x();
+    state.initial.velocity_y = now_.outputs.center_of_mass_velocity.y();
+  }
+  state.tip = world(now_.outputs.contact_point).head<2>();
+  return state;
+}
 
 bool TopInstance::update(const TopParameters& top, const IntegratorSettings& integrator) {
   const bool switched = simulator_->update(top, integrator);  // validates; changes nothing if it throws
@@ -211,7 +244,7 @@ TopInstance::BodyChange TopInstance::prepare_body(const TopParameters& top, cons
 }
 
 void TopInstance::change_body(BodyChange change) {
-  start(std::move(change.simulator), change.time_base, change.origin);
+  start(std::move(change.simulator), change.time_base, change.origin, -1);  // between ticks
   start_config_ = change.start;
   nh_.setParam("robot_description", top_urdf(change.top, body_frame_));
   place_tip_at(change.tip);  // the tip stays where it is: the new model's origin moves under it
@@ -229,7 +262,12 @@ bool TopInstance::advance(double world_time, const WorkBudget& budget) {
     }
     return true;  // stopped: the final pose goes on being published
   }
-  const double target = world_time - origin_;
+  // The top's time: the ticks since its start / rate where the rate has not changed since (one
+  // rounding: a start at another world time runs alike, bit for bit); else the difference.
+  const WorldTime now = world_clock_();
+  const double target = origin_tick_ >= 0 && origin_tick_ >= now.rate_since && now.time == world_time
+                            ? static_cast<double>(now.tick - origin_tick_) / now.rate
+                            : world_time - origin_;
   const Event event = simulator_->advance_to(target, budget);
   // The transitions passed, also by a call that ran out of budget (the next one goes on after them).
   for (const Transition& transition : simulator_->take_transitions()) {

@@ -12,13 +12,20 @@
 namespace spinning_top {
 namespace ros_front_end {
 
+/// ~publish_clock: who gives the node its time.
+enum class ClockMode {
+  kAuto,     ///< publish /clock unless another node does; then follow that /clock
+  kPublish,  ///< always publish /clock (true)
+  kOff,      ///< never publish /clock; pace by the wall clock (false)
+};
+
 struct NodeSettings {
   double rate = defaults::kRate;  ///< ticks per simulated second [Hz]
   double real_time_factor = defaults::kRealTimeFactor;  ///< simulated s per wall s; 0 = as fast as possible
   /// [wall s] missed ticks are taken late (catch-up) up to this lag; beyond it they are given
   /// up (reported), so that an overloaded machine does not fall ever further behind
   double max_lag = 1.0;
-  bool publish_clock = true;        ///< publish /clock (for use_sim_time users)
+  ClockMode publish_clock = ClockMode::kAuto;  ///< ~publish_clock: auto (default), true or false
   double clock_rate = 0.0;          ///< /clock messages per simulated second [Hz]; 0 = every tick
   double tf_rate = 0.0;             ///< /tf messages per simulated second [Hz]; 0 = every tick
   bool start_paused = false;
@@ -26,8 +33,15 @@ struct NodeSettings {
   /// published) have a subscriber, e.g. `rosbag record`, so that a recording starts at time 0
   bool wait_for_subscriber = false;
   std::string world_frame = "world";
+  /// The node's namespace without its leading '/' ("r1"; "" in the root namespace), or
+  /// ~frame_prefix: it prefixes the default frames (r1/top, r1/contact, r1/<top>/top), so that
+  /// nodes in two namespaces broadcast different frames under the shared world (REP-105)
+  std::string frame_prefix;
+  /// ~body_frame, ~contact_frame as given (the defaults "top", "contact" when not set): an
+  /// explicit one is used as it is, without the prefix
   std::string body_frame = "top";
   std::string contact_frame = "contact";
+  bool body_frame_explicit = false, contact_frame_explicit = false;
   /// [s] wall time one timer callback (or ~step) may integrate; a tick that needs more goes on
   /// in the next callback, and diagnostics report it (ERROR)
   double tick_budget = 0.05;
@@ -48,6 +62,14 @@ struct NodeSettings {
   /// (~tops: [slow, fast]); empty: one top from the node's own keys, with the unprefixed names
   std::vector<std::string> tops;
 };
+
+/// The body frame (body true) or the contact frame of the top `top_name` ("" for the node's own
+/// top): [<frame_prefix>/][<top_name>/]top by default; an explicit ~body_frame (~contact_frame)
+/// as it is, [<top_name>/]<body_frame>.
+std::string top_frame(const NodeSettings& settings, const std::string& top_name, bool body);
+
+/// The node's namespace of a private namespace ("/r1/spinning_top" -> "r1", "/spinning_top" -> "").
+std::string frame_prefix_of(const std::string& private_namespace);
 
 /// Every private key the node itself reads (besides the scene keys of parameter_specs()).
 const std::vector<std::string>& node_setting_keys();

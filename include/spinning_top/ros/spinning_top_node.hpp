@@ -7,14 +7,19 @@
 #include <diagnostic_updater/diagnostic_updater.h>
 #include <ros/callback_queue.h>
 #include <ros/ros.h>
+#include <rosgraph_msgs/Clock.h>
 #include <std_srvs/Trigger.h>
 
+#include <condition_variable>
 #include <csignal>
 #include <memory>
+#include <mutex>
 #include <stdexcept>
 #include <string>
+#include <thread>
 #include <vector>
 
+#include "spinning_top/GetState.h"
 #include "spinning_top/Kill.h"
 #include "spinning_top/SetState.h"
 #include "spinning_top/Spawn.h"
@@ -59,6 +64,10 @@ class SpinningTopNode {
   /// InvalidParameter (naming the key) so that main can exit with nothing published, or
   /// StartupInterrupted when ROS shuts down during the start.
   SpinningTopNode(ros::NodeHandle nh, ros::NodeHandle private_nh);
+  /// Stops the thread that asks the master who publishes /clock (~publish_clock auto).
+  ~SpinningTopNode();
+  SpinningTopNode(const SpinningTopNode&) = delete;
+  SpinningTopNode& operator=(const SpinningTopNode&) = delete;
 
   /// SIGINT (main's handler; async-signal-safe): the start stops at its next step, the spin at
   /// its next callback.
@@ -113,10 +122,43 @@ class SpinningTopNode {
   void update_hardware_id();
   void restart_timer();
   void report(const std::string& status);
-  /// A top's stamps for its events: stamp_origin_ + world time (as the ticks', read when used).
+  /// A top's stamps for its events: as the ticks' (stamp_at, read when used).
   TopInstance::StampOf stamp_of() const {
-    return [this](double world_time) { return stamp_origin_ + ros::Duration(world_time); };
+    return [this](double world_time) { return stamp_at(world_time); };
   }
+  /// The tick clock now, for a top's exact time since its start.
+  TopInstance::WorldClock world_clock() const {
+    return [this] { return WorldTime{clock_.time(), clock_.ticks(), clock_.rate_since(), clock_.rate()}; };
+  }
+  /// The stamp of a world time: stamp_origin_.base + (world_time - stamp_origin_.world_base).
+  ros::Time stamp_at(double world_time) const { return stamp_origin_.at(world_time); }
+
+  // --- The clock (~publish_clock). auto: at start the node asks the master (getSystemState)
+  // who publishes /clock; if nobody does, it advertises /clock and asks again, and of the
+  // ~publish_clock auto nodes publishing then the first registered one keeps publishing (every
+  // node reads the same list, so exactly one does; the others stop before their first tick).
+  // A publisher that is no such node (rosbag play --clock, Gazebo, ~publish_clock true) is
+  // always followed. A thread asks again every second (clock_arbiter_loop), so that a clock
+  // appearing later is followed and a clock that disappears is taken over.
+  enum class ClockRole { kPublish, kFollow, kOwnPace };
+  struct ClockVerdict {
+    bool publish = true;
+    std::string source;  ///< the publisher followed (when !publish)
+  };
+  /// What an auto node does, given the publishers of /clock in the master's order (ourselves
+  /// among them if registered). Reads the others' ~publish_clock (master calls; any thread).
+  static ClockVerdict judge_clock(const std::vector<std::string>& publishers);
+  void start_clock();
+  void clock_arbiter_loop();
+  void on_clock_role_timer(const ros::WallTimerEvent&);
+  void publish_own_clock(const std::string& why);
+  void follow_clock(const std::string& source, const std::string& why);
+  void on_clock(const rosgraph_msgs::Clock::ConstPtr& message);
+  /// Following: the ticks stamped at most external_time_, within the tick budget; a backlog
+  /// goes on at the timer.
+  void follow_to(ros::WallTime start);
+  /// From now on the world's current time is stamped `stamp` (the next tick one period later).
+  void anchor_stamps(const ros::Time& stamp);
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& status);
   void reconfigure(SpinningTopConfig& config, uint32_t level);
 
@@ -128,6 +170,7 @@ class SpinningTopNode {
   bool on_spawn(Spawn::Request& request, Spawn::Response& response);
   bool on_kill(Kill::Request& request, Kill::Response& response);
   bool on_set_state(SetState::Request& request, SetState::Response& response);
+  bool on_get_state(GetState::Request& request, GetState::Response& response);
 
   ros::NodeHandle nh_, private_nh_;
   NodeSettings settings_;
@@ -136,9 +179,46 @@ class SpinningTopNode {
   std::vector<ros::ServiceServer> top_reset_services_;  // ~<name>/reset, one per named top
 
   // Stamps are stamp_origin_ + simulated time: the world's time never goes back (a reset
-  // restarts the tops' times, not the world's), so stamps never repeat or go back.
-  ros::Time stamp_origin_;
+  // restarts the tops' times, not the world's), so stamps never repeat or go back, unless an
+  // external clock the node follows goes back (its source was reset): then they follow it.
+  struct StampOrigin {
+    ros::Time base;           ///< the stamp of world time world_base
+    double world_base = 0.0;  ///< [s] (a ros::Time cannot be negative: following a clock, the
+                              ///< external time may be smaller than the world's)
+    ros::Time at(double world_time) const {
+      const double offset = world_time - world_base;
+      if (offset < 0.0 && base.toSec() + offset <= 0.0) return ros::Time(0, 1);  // never 0 or negative
+      return base + ros::Duration(offset);
+    }
+    /// `origin + ros::Duration(world_time)`: the stamp of that world time.
+    ros::Time operator+(const ros::Duration& world_time) const { return at(world_time.toSec()); }
+    StampOrigin& operator+=(const ros::Duration& shift) {
+      base += shift;
+      return *this;
+    }
+    StampOrigin& operator=(const ros::Time& stamp) {  // stamp of world time 0
+      base = stamp;
+      world_base = 0.0;
+      return *this;
+    }
+  };
+  StampOrigin stamp_origin_;
   ros::Time last_stamp_;
+
+  ClockRole clock_role_ = ClockRole::kOwnPace;
+  std::string clock_source_;     // the node whose /clock is followed
+  ros::Subscriber clock_subscriber_;
+  bool external_anchored_ = false;  // following: the first /clock message came
+  ros::Time external_time_;         // following: the last /clock received
+  ros::WallTime external_wall_;     // ... and when
+  long clock_role_changes_ = 0, external_jumps_back_ = 0;
+  std::thread clock_arbiter_;
+  std::mutex arbiter_mutex_;
+  std::condition_variable arbiter_wake_;
+  bool arbiter_stop_ = false;
+  bool verdict_ready_ = false;  // a verdict the main thread has not applied yet
+  ClockVerdict verdict_;
+  ros::WallTimer clock_role_timer_;
   bool paused_ = false;
   bool waiting_for_subscriber_ = false;  // ~wait_for_subscriber: no tick yet, nobody listening yet
   bool tick_unfinished_ = false;  // the current tick ran out of its budget; the next call goes on
@@ -162,7 +242,7 @@ class SpinningTopNode {
   std::vector<geometry_msgs::TransformStamped> static_sent_;  // the latched /tf_static message's frames
   SceneType node_scene_ = SceneType::kFixedTip;  // the scene of the node's own keys (~scene)
   ros::ServiceServer reset_service_, reload_service_, pause_service_, resume_service_, step_service_,
-      spawn_service_, kill_service_, set_state_service_;
+      spawn_service_, kill_service_, set_state_service_, get_state_service_;
   ros::WallTimer timer_, diagnostics_timer_;
   std::unique_ptr<diagnostic_updater::Updater> diagnostics_;
   std::unique_ptr<ReconfigureServer> reconfigure_server_;

@@ -20,19 +20,39 @@
 namespace spinning_top {
 namespace ros_front_end {
 
+/// The world's time at a tick, as the tick clock has it (TickClock): its value, and the tick
+/// counts by which a top's own time is exact (the same number of ticks since its start gives
+/// the same time, bit for bit, wherever that start was: a state set back runs again alike).
+struct WorldTime {
+  double time = 0.0;    ///< [s] TickClock::time()
+  long tick = 0;        ///< TickClock::ticks()
+  long rate_since = 0;  ///< TickClock::rate_since()
+  double rate = 1.0;    ///< [Hz] TickClock::rate()
+};
+
+/// A top's state in the fields of ~set_state (SetState.srv), as ~get_state returns it.
+struct SettableState {
+  InitialConditions initial;
+  Eigen::Vector2d tip = Eigen::Vector2d::Zero();  ///< [m] the tip on the floor (x, y)
+};
+
 class TopInstance {
  public:
   /// The world's stamp of a world time (the node's stamp origin + t): events are stamped with
   /// their own instant, which lies between two ticks.
   using StampOf = std::function<ros::Time(double world_time)>;
+  /// The world's tick clock now (WorldTime): a start at its time() is at its tick.
+  using WorldClock = std::function<WorldTime()>;
 
   /// `name` "" is the node's own top: frames <body_frame>, <contact_frame> and topics ~/...;
-  /// a named top has frames <name>/<body_frame>, <name>/<contact_frame> and topics ~<name>/....
+  /// a named top has frames <name>/<body_frame>, <name>/<contact_frame> and topics ~<name>/...
+  /// (frames prefixed with the node's namespace unless given explicitly: top_frame()).
   /// Its URDF goes on ~robot_description (~<name>/robot_description).
   /// Its simulated time 0 is the world's `world_time`; its tip starts at `tip_xy` on the floor.
   /// Throws InvalidParameter (nothing advertised) if the configuration is invalid.
   TopInstance(std::string name, const SceneConfig& config, const Eigen::Vector2d& tip_xy,
-              const NodeSettings& settings, ros::NodeHandle private_nh, double world_time, StampOf stamp_of);
+              const NodeSettings& settings, ros::NodeHandle private_nh, double world_time, StampOf stamp_of,
+              WorldClock world_clock);
   ~TopInstance();
   TopInstance(const TopInstance&) = delete;
   TopInstance& operator=(const TopInstance&) = delete;
@@ -65,6 +85,12 @@ class TopInstance {
   void reset(double world_time);
   /// A new start (set_state, reload): validated first; throws InvalidParameter and changes nothing.
   void restart(const SceneConfig& config, const Eigen::Vector2d& tip_xy, double world_time);
+  /// The state now in ~set_state's fields. At the top's time 0 (just started, reset or set) they
+  /// are those it started from, exactly (so that ~set_state of them gives them back bit for
+  /// bit); later the attitude, rates and tip of the state now (G's velocity in the viscous scene
+  /// only; elsewhere 0, which ~set_state requires). Throws InvalidParameter("name", why) when
+  /// ~set_state could not start from it: the tip off the floor, or the run ended.
+  SettableState settable_state() const;
   /// Live changes of the model (the live keys of level kModel, live_keys.def) and of the
   /// integrator settings, keeping the state (Simulator::update).
   /// Throws InvalidParameter and changes nothing; returns true if auto switched its method.
@@ -110,7 +136,8 @@ class TopInstance {
  private:
   /// Replaces the simulator (validated first) and rebaselines the energy.
   void start(const SceneConfig& config, double time_base, double world_time);
-  void start(std::unique_ptr<Simulator> simulator, double time_base, double world_time);
+  /// `origin_tick`: the tick of the simulator's time 0, -1 if it lies between ticks.
+  void start(std::unique_ptr<Simulator> simulator, double time_base, double world_time, long origin_tick);
   /// The core's origin on the floor such that the current contact point is at tip_xy.
   void place_tip_at(const Eigen::Vector2d& tip_xy);
   void handle_event(Event event);
@@ -133,9 +160,11 @@ class TopInstance {
   Vector3 offset_ = Vector3::Zero();  // the core's origin in the world frame (on the floor)
   Vector3 pivot_ = Vector3::Zero();   // fixed tip: where the tip pivots (core frame): its start or last landing
   double origin_ = 0.0;     // [s] world time of the simulator's time 0
+  long origin_tick_ = -1;   // its tick (-1: between ticks, after a live body change)
   double time_base_ = 0.0;  // [s] the top's time at the simulator's time 0 (live body changes)
   double energy_baseline_ = 0.0;
   StampOf stamp_of_;
+  WorldClock world_clock_;
   std::deque<Vector3> trace_;
   ros::NodeHandle nh_;  // ~ or ~<name>
   /// Subscribers of each per-tick topic, counted by the publishers' connect and disconnect
