@@ -106,3 +106,41 @@ def test_rviz_shows_the_node_under_a_namespace(launch, config, expected):
     names = rviz_topics(config)
     assert all(not name.startswith("/") for _, name in names), names
     assert {resolve(name, rviz["namespace"]) for _, name in names} == expected
+
+
+# The parameters roslaunch would set for an XML string (a child process, like LOADER).
+PARAMETERS = r"""
+import json, sys
+import roslaunch.config
+config = roslaunch.config.load_config_default([], None, roslaunch_strs=[sys.argv[1]])
+print(json.dumps({name: param.value for name, param in config.params.items()}))
+"""
+
+
+def parameters(xml):
+    env = dict(os.environ)
+    env["ROS_PACKAGE_PATH"] = os.pathsep.join(filter(None, [str(SOURCE_DIR), env.get("ROS_PACKAGE_PATH")]))
+    done = subprocess.run(["/usr/bin/python3", "-c", PARAMETERS, xml], env=env, capture_output=True, text=True,
+                          timeout=120)
+    assert done.returncode == 0, done.stderr[-2000:]
+    return json.loads(done.stdout.strip().splitlines()[-1])
+
+
+def test_two_includes_share_one_clock_and_one_use_sim_time():
+    """Item 1: spinning_top.launch included twice. Each node's ~publish_clock is auto (one /clock in
+    the graph: the first node publishes it, the other follows), not true (both published, and
+    /clock went back); with set_use_sim_time:=false an include leaves the global /use_sim_time to
+    the including file, so that one include's use_sim_time:=false cannot change it for the other."""
+    def group(ns, **args):
+        passed = "".join(f'<arg name="{key}" value="{value}"/>' for key, value in args.items())
+        return f'<group ns="{ns}"><include file="{LAUNCH / "spinning_top.launch"}">{passed}</include></group>'
+
+    both = parameters(f'<launch>{group("r1")}{group("r2")}</launch>')
+    assert both["/r1/spinning_top/publish_clock"] == both["/r2/spinning_top/publish_clock"] == "auto"
+    assert both["/use_sim_time"] is True
+    composed = parameters('<launch><param name="/use_sim_time" value="true"/>'
+                          f'{group("r1", set_use_sim_time="false")}'
+                          f'{group("r2", set_use_sim_time="false", use_sim_time="false")}</launch>')
+    assert composed["/use_sim_time"] is True
+    assert composed["/r1/spinning_top/publish_clock"] == "auto"
+    assert composed["/r2/spinning_top/publish_clock"] is False
