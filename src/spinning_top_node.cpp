@@ -32,8 +32,7 @@ int main(int argc, char** argv) {
   try {
     SpinningTopNode node(nh, private_nh);
     // ros::spin(), ending at SIGINT as well as at a shutdown from elsewhere (rosnode kill).
-    while (ros::ok() && !SpinningTopNode::stop_requested())
-      queue.callAvailable(ros::WallDuration(0.1));
+    while (ros::ok() && !SpinningTopNode::stop_requested()) node.spin_once();
     if (SpinningTopNode::stop_requested() && ros::ok()) node.unregister_at_exit();
     ros::shutdown();
   } catch (const spinning_top::InvalidParameter& error) {

@@ -742,11 +742,15 @@ void SpinningTopNode::restart_timer() {
   ticks_per_marker_ = ticks_per(settings_.rate, settings_.marker_rate);
   ticks_per_clock_ = ticks_per(settings_.rate, settings_.clock_rate);
   ticks_per_tf_ = ticks_per(settings_.rate, settings_.tf_rate);
-  if (timer_.isValid()) {
-    timer_.setPeriod(ros::WallDuration(period));
-  } else {
-    timer_ = nh_.createWallTimer(ros::WallDuration(period), &SpinningTopNode::on_timer, this);
-  }
+  const bool first = !timer_.isValid();
+  timer_.setPeriod(ros::WallDuration(period));
+  if (first) timer_.start();  // as createWallTimer's timer
+}
+
+void SpinningTopNode::spin_once() {
+  auto* queue = dynamic_cast<NodeCallbackQueue*>(nh_.getCallbackQueue());
+  queue->callAvailable(timer_.until_due(ros::WallDuration(0.1)));
+  if (ros::ok() && !stop_requested() && timer_.take_due()) on_timer(ros::WallTimerEvent());
 }
 
 void SpinningTopNode::on_timer(const ros::WallTimerEvent&) {

@@ -48,6 +48,10 @@ TEST(NodeBadParameter, AxialInertiaAboveTwiceTransverse) {
   expect_refused("bad_inertia", "_inertia_axial:=1e-4 _inertia_transverse:=4e-5", "inertia_axial");
 }
 TEST(NodeBadParameter, FrictionInTheFixedTipScene) { expect_refused("bad_friction", "_friction:=0.1", "friction"); }
+// ~publish_clock takes auto, true or false (issue 20): anything else is refused by name.
+TEST(NodeBadParameter, PublishClockNotAutoOrBool) {
+  expect_refused("bad_clock", "_publish_clock:=maybe", "publish_clock");
+}
 TEST(NodeBadParameter, TiltWithTheAxisBelowTheFloor) { expect_refused("bad_tilt", "_initial/tilt:=2.0", "initial/tilt"); }
 // Several tops (~tops): a name listed twice, a top's position that is not a number, a top's own
 // key named with its top.
