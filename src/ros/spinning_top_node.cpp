@@ -29,6 +29,8 @@ namespace spinning_top {
 namespace ros_front_end {
 namespace {
 
+// A subscriber queue as short as rosbag record's (its subscriptions queue 100 messages).
+constexpr long kSubscriberQueueHint = 100;
 constexpr double kAsFastAsPossibleSlice = 1e-3;  // [s] wall time per timer callback when rtf = 0
 // Bounds of a ~spawn request: a path (PATH_MAX), key=value assignments and their values (a
 // number or a name; simulate's --set takes the same).
@@ -759,7 +761,16 @@ void SpinningTopNode::on_timer(const ros::WallTimerEvent&) {
   if (clock_role_ == ClockRole::kFollow) return follow_to(start);  // a backlog of the external clock
   if (waiting_for_subscriber_) {
     const bool clock_heard = clock_role_ != ClockRole::kPublish || clock_publisher_.getNumSubscribers() > 0;
-    if (!clock_heard || tops_.empty() || !tops_.front()->subscribed()) return;
+    if (!clock_heard || tops_.empty() || !tops_.front()->subscribed()) {
+      // Said, not silent: a recorder subscribed to other names (an absolute /spinning_top/...
+      // under a namespace) left the node waiting for ever without a word.
+      const std::string prefix = private_nh_.getNamespace() + "/" +
+                                 (tops_.empty() || tops_.front()->name().empty() ? std::string() : tops_.front()->name() + "/");
+      ROS_INFO_THROTTLE(5.0, "spinning_top: ~wait_for_subscriber: no tick until %scontact_point and %sstate%s have a "
+                        "subscriber (record:=true starts rosbag record)", prefix.c_str(), prefix.c_str(),
+                        clock_role_ == ClockRole::kPublish ? " and /clock" : "");
+      return;
+    }
     // The first subscriber is there: pacing (and wall-clock stamps) start now, at tick 1.
     waiting_for_subscriber_ = false;
     clock_.anchor(start.toSec());
@@ -789,7 +800,20 @@ void SpinningTopNode::on_timer(const ros::WallTimerEvent&) {
     if (paced && !tick_unfinished_) {
       const long due = clock_.due(now.toSec());
       if (due == 0) break;
-      if (due > 1) ++late_ticks_;
+      if (due > 1) {
+        ++late_ticks_;
+        // A catch-up (the node was held up) publishes its ticks back to back: more of them than
+        // a subscriber's queue holds (rosbag record's: 100) can be lost there, silently. Said
+        // here and in the diagnostics, since the node cannot see a subscriber's loss.
+        if (++catch_up_run_ == kSubscriberQueueHint + 1) {
+          ++long_catch_ups_;
+          ROS_WARN_THROTTLE(5.0, "spinning_top: held up, the node publishes more than %ld ticks back to back: a "
+                                 "subscriber whose queue is shorter (rosbag record's: 100) may lose messages",
+                            kSubscriberQueueHint);
+        }
+      } else {
+        catch_up_run_ = 0;
+      }
     }
     const bool finished = tick(deadline);
     const ros::WallTime end = ros::WallTime::now();
@@ -896,6 +920,10 @@ void SpinningTopNode::diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat
   if (given_up_in_window > 0)
     status.mergeSummaryf(DiagnosticStatus::WARN, "%ld ticks given up beyond ~max_lag = %g s", given_up_in_window,
                          settings_.max_lag);
+  if (long_catch_ups_ > long_catch_ups_at_window_start_)
+    status.mergeSummaryf(DiagnosticStatus::WARN,
+                         "more than %ld ticks published back to back (a catch-up): a subscriber with a shorter "
+                         "queue (rosbag record's: 100) may have lost messages", kSubscriberQueueHint);
   if (exhaustions_in_window > 0)
     status.mergeSummaryf(DiagnosticStatus::ERROR, "ticks ran out of their %g s work budget %ld times in the last %.1f s",
                          settings_.tick_budget, exhaustions_in_window, wall);
@@ -920,6 +948,7 @@ void SpinningTopNode::diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat
   status.add("late ticks (total)", late_ticks_);
   status.add("late ticks (window)", late_in_window);
   status.add("ticks given up (total)", given_up_ticks_);
+  status.add("catch-ups over 100 ticks (total)", long_catch_ups_);
   status.addf("tick budget [s]", "%g", settings_.tick_budget);
   status.add("ticks out of budget (total)", budget_exhaustions_);
   status.add("ticks out of budget (window)", exhaustions_in_window);
@@ -932,6 +961,7 @@ void SpinningTopNode::diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat
   ticks_in_window_ = 0;
   tick_cost_sum_ = tick_cost_max_ = 0.0;
   late_ticks_at_window_start_ = late_ticks_;
+  long_catch_ups_at_window_start_ = long_catch_ups_;
   given_up_ticks_at_window_start_ = given_up_ticks_;
   budget_exhaustions_at_window_start_ = budget_exhaustions_;
 }

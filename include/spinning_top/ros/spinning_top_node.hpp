@@ -270,6 +270,8 @@ class SpinningTopNode {
   long ticks_per_clock_ = 1, ticks_per_tf_ = 1, ticks_per_marker_ = 1;
 
   // Pacing and cost, reported in diagnostics (per 1 s window and in total).
+  long catch_up_run_ = 0;                                   // late ticks in a row, back to back
+  long long_catch_ups_ = 0, long_catch_ups_at_window_start_ = 0;  // runs longer than kSubscriberQueueHint
   long late_ticks_ = 0, late_ticks_at_window_start_ = 0;        // taken after their slot (catch-up)
   long given_up_ticks_ = 0, given_up_ticks_at_window_start_ = 0;  // beyond ~max_lag
   long budget_exhaustions_ = 0, budget_exhaustions_at_window_start_ = 0;
