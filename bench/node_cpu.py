@@ -16,14 +16,14 @@ Writes node_cpu.md into RESULTS_DIR.
 import argparse
 import os
 import signal
-import socket
 import statistics
 import subprocess
 import sys
 import tempfile
 import time
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from node_load import ROOT, cpu_seconds, free_port  # noqa: E402
 
 # name: (launch args of spinning_top.launch, extra private parameters of the node, what it shows)
 VARIANTS = {
@@ -31,18 +31,6 @@ VARIANTS = {
     "no_clock": (["use_sim_time:=false"], {}, "use_sim_time false: no /clock, wall-clock stamps"),
     "clock_100": ([], {"clock_rate": 100}, "/clock at 100 Hz (~clock_rate)"),
 }
-
-
-def free_port():
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
-def cpu_seconds(pid):
-    with open(f"/proc/{pid}/stat") as f:
-        fields = f.read().rsplit(")", 1)[1].split()
-    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
 
 
 def pid_of(name, parent):

@@ -497,13 +497,7 @@ void SpinningTopNode::follow_to(ros::WallTime start) {
   auto* queue = dynamic_cast<NodeCallbackQueue*>(nh_.getCallbackQueue());
   while (!paused_ && now < deadline) {
     if (!tick_unfinished_ && stamp_at(clock_.next_time()) > external_time_) break;
-    const bool finished = tick(deadline);
-    const ros::WallTime end = ros::WallTime::now();
-    tick_cost_sum_ += (end - now).toSec();
-    tick_cost_max_ = std::max(tick_cost_max_, (end - now).toSec());
-    now = end;
-    if (!finished) break;
-    ++ticks_in_window_;
+    if (!timed_tick(deadline, now)) break;
     if (queue != nullptr && queue->others_waiting()) break;  // served between two ticks
   }
   const bool backlog = !paused_ && (tick_unfinished_ || stamp_at(clock_.next_time()) <= external_time_);
@@ -815,13 +809,7 @@ void SpinningTopNode::on_timer(const ros::WallTimerEvent&) {
         catch_up_run_ = 0;
       }
     }
-    const bool finished = tick(deadline);
-    const ros::WallTime end = ros::WallTime::now();
-    tick_cost_sum_ += (end - now).toSec();
-    tick_cost_max_ = std::max(tick_cost_max_, (end - now).toSec());
-    now = end;
-    if (!finished) break;
-    ++ticks_in_window_;
+    if (!timed_tick(deadline, now)) break;
     // A service call, a parameter update or the diagnostics waiting: served now, between two
     // ticks, rather than after the whole budget (the timer, late, fires again at once). With
     // many tops a node behind the wall clock answers ~spawn within one tick, however long the
@@ -830,6 +818,16 @@ void SpinningTopNode::on_timer(const ros::WallTimerEvent&) {
     if (queue != nullptr && queue->others_waiting()) break;
   }
   if (paced) last_lag_ = clock_.lag(now.toSec());
+}
+
+bool SpinningTopNode::timed_tick(ros::WallTime deadline, ros::WallTime& now) {
+  const bool finished = tick(deadline);
+  const ros::WallTime end = ros::WallTime::now();
+  tick_cost_sum_ += (end - now).toSec();
+  tick_cost_max_ = std::max(tick_cost_max_, (end - now).toSec());
+  now = end;
+  if (finished) ++ticks_in_window_;
+  return finished;
 }
 
 bool SpinningTopNode::tick(ros::WallTime deadline) {

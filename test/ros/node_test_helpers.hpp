@@ -6,6 +6,7 @@
 #include <dynamic_reconfigure/Reconfigure.h>
 #include <geometry_msgs/WrenchStamped.h>
 #include <gtest/gtest.h>
+#include <ros/master.h>
 #include <ros/ros.h>
 #include <std_srvs/Trigger.h>
 
@@ -125,6 +126,18 @@ inline int run_node_tests(int argc, char** argv, const char* name, int threads) 
   const int result = RUN_ALL_TESTS();
   ros::shutdown();
   return result;
+}
+
+/// The publishers of a topic as the master lists them (its getSystemState).
+inline std::vector<std::string> publishers_of(const std::string& topic) {
+  XmlRpc::XmlRpcValue request, response, payload;
+  request[0] = ros::this_node::getName();
+  std::vector<std::string> nodes;
+  if (!ros::master::execute("getSystemState", request, response, payload, false)) return {"(master did not answer)"};
+  for (int i = 0; i < payload[0].size(); ++i)
+    if (static_cast<std::string>(payload[0][i][0]) == topic)
+      for (int j = 0; j < payload[0][i][1].size(); ++j) nodes.push_back(static_cast<std::string>(payload[0][i][1][j]));
+  return nodes;
 }
 
 }  // namespace node_test

@@ -17,20 +17,10 @@
 #include "spinning_top/TopState.h"
 
 using node_test::Recorder;
+using node_test::publishers_of;
 using node_test::wait_for;
 
 namespace {
-
-std::vector<std::string> publishers_of(const std::string& topic) {
-  XmlRpc::XmlRpcValue request, response, payload;
-  request[0] = ros::this_node::getName();
-  std::vector<std::string> nodes;
-  if (!ros::master::execute("getSystemState", request, response, payload, false)) return {"(master did not answer)"};
-  for (int i = 0; i < payload[0].size(); ++i)
-    if (static_cast<std::string>(payload[0][i][0]) == topic)
-      for (int j = 0; j < payload[0][i][1].size(); ++j) nodes.push_back(static_cast<std::string>(payload[0][i][1][j]));
-  return nodes;
-}
 
 /// The node's diagnostics says which clock it goes by.
 std::string clock_of(const std::vector<diagnostic_msgs::DiagnosticArray>& arrays) {

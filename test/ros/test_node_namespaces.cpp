@@ -14,23 +14,12 @@
 #include "node_test_helpers.hpp"
 
 using node_test::run_command;
+using node_test::publishers_of;
 using node_test::wait_for;
 
 namespace {
 
 const std::string kR1 = "/r1/spinning_top", kR2 = "/r2/spinning_top";
-
-/// The publishers of a topic as the master lists them.
-std::vector<std::string> publishers_of(const std::string& topic) {
-  XmlRpc::XmlRpcValue request, response, payload;
-  request[0] = ros::this_node::getName();
-  std::vector<std::string> nodes;
-  if (!ros::master::execute("getSystemState", request, response, payload, false)) return {"(master did not answer)"};
-  for (int i = 0; i < payload[0].size(); ++i)
-    if (static_cast<std::string>(payload[0][i][0]) == topic)
-      for (int j = 0; j < payload[0][i][1].size(); ++j) nodes.push_back(static_cast<std::string>(payload[0][i][1][j]));
-  return nodes;
-}
 
 std::string joined(const std::vector<std::string>& names) {
   std::string text;

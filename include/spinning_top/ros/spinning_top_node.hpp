@@ -161,6 +161,8 @@ class SpinningTopNode {
   /// (false, nothing published) and the next call goes on with it, so the published samples do
   /// not depend on where it stopped.
   bool tick(ros::WallTime deadline);
+  /// tick() with its wall cost counted for the diagnostics; `now` moves to its end.
+  bool timed_tick(ros::WallTime deadline, ros::WallTime& now);
   void publish(const ros::Time& stamp);
   void send_static_transforms();
   /// diagnostics' hardware id: spinning_top/<scene> of the tops (each status has its own top's).
