@@ -71,20 +71,29 @@ TEST(MotionRange, ExactExtremesBoundDenseSamplesOfTheIntegrableScenes) {
 }
 
 // A torque-free top (g = 0) on the pivot: e_Zz = a + rho cos(w t - delta), R = -m h w^2 rho
-// cos(...): the free-rotation branch of the closed form.
+// cos(...): the free-rotation branch of the closed form. Released below the mean of e_Zz (R > 0)
+// and tilting further, it passes its largest tilt (a turning point inside the run) and tilts
+// back up until R reaches 0: a lift-off, where the contact phase ends. (Released with R < 0 it
+// ended at t = 0, and the test compared a range of one sample with itself.)
 TEST(MotionRange, TorqueFreeTopMatchesSamples) {
   SceneConfig c = toy(SceneType::kFixedTip, 0.4, 30.0, IntegratorType::kExact);
   c.top.gravity = 0.0;
-  c.after_lift_off = AfterLiftOff::kStop;  // the closed form's range of the contact phase (g = 0: R < 0 soon)
-  c.initial.precession_rate = 0.0;
-  c.initial.nutation_rate = 0.5;
+  c.after_lift_off = AfterLiftOff::kStop;  // the closed form's range of the contact phase
+  c.initial.precession_rate = 5.0;
+  c.initial.nutation_rate = 1.0;  // [rad/s] tilting further at the release
   const auto sim = make_simulator(c);
+  ASSERT_GT(sim->snapshot().outputs.normal_force, 0.0);
   const Event event = sim->advance_to(2.0);
+  ASSERT_EQ(event, Event::kLiftOff);
+  ASSERT_GT(sim->time(), 0.01);  // a part of a nutation, not the release alone
   const std::optional<MotionRange> exact = sim->motion_range();
   ASSERT_TRUE(exact.has_value());
   const MotionRange dense = sampled(c, sim->time(), 5e-6);
   EXPECT_NEAR(exact->max_tilt, dense.max_tilt, 1e-8) << to_string(event);
+  EXPECT_GT(exact->max_tilt, c.initial.tilt + 1e-3);  // the turning point, inside the run
   EXPECT_NEAR(exact->min_normal_force, dense.min_normal_force, 1e-8);
+  report("torque-free: contact phase [s]", sim->time());
+  report("torque-free: exact - sampled largest tilt [rad]", exact->max_tilt - dense.max_tilt);
 }
 
 TEST(MotionRange, NoneForTimeSteppersAndAfterALiveUpdate) {
