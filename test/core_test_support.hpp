@@ -19,20 +19,25 @@
 namespace spinning_top {
 namespace core_test {
 
-/// The toy top tilted 0.3 rad with some precession and nutation, G sliding at 5 cm/s, against
-/// friction k: every term of the viscous equations is exercised (Model: Viscous, or a wrapper
-/// of it constructed the same way).
+/// The slipping top's start: tilted 0.3 rad with some precession and nutation, spinning at
+/// `spin`, G sliding at 5 cm/s.
+inline InitialConditions slipping_start(double spin = 150.0) {
+  InitialConditions ic;
+  ic.tilt = 0.3;
+  ic.spin = spin;
+  ic.precession_rate = 5.0;
+  ic.nutation_rate = 2.0;
+  ic.velocity_x = 0.05;
+  return ic;
+}
+
+/// The toy top from slipping_start() against friction k: every term of the viscous equations is
+/// exercised (Model: Viscous, or a wrapper of it constructed the same way).
 template <class Model = Viscous>
 Model slipping_top(double friction) {
   TopParameters top;
   top.friction = friction;
-  InitialConditions ic;
-  ic.tilt = 0.3;
-  ic.spin = 150.0;
-  ic.precession_rate = 5.0;
-  ic.nutation_rate = 2.0;
-  ic.velocity_x = 0.05;
-  return Model(top, ic);
+  return Model(top, slipping_start());
 }
 
 /// Prints a measured figure next to the test's output (the numbers doc/physics_tests.md quotes).

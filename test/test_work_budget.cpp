@@ -97,11 +97,7 @@ TEST(WorkBudget, RunWorkNeverDecreasesAndCountsAtLeastTheSteps) {
   SceneConfig stiff;
   stiff.scene = SceneType::kViscous;
   stiff.top.friction = 1e7;
-  stiff.initial.tilt = 0.3;
-  stiff.initial.spin = 2000.0;
-  stiff.initial.precession_rate = 5.0;
-  stiff.initial.nutation_rate = 2.0;
-  stiff.initial.velocity_x = 0.05;
+  stiff.initial = core_test::slipping_start(2000.0);
   stiff.integrator.type = IntegratorType::kRadau5;
   stiff.integrator.tolerance = 1e-14;
   SceneConfig hops;
@@ -132,11 +128,7 @@ TEST(WorkBudget, ASampledRunSpendsItsAllowanceInWork) {
   SceneConfig config;
   config.scene = SceneType::kViscous;
   config.top.friction = 1e5;
-  config.initial.tilt = 0.3;
-  config.initial.spin = 150.0;
-  config.initial.precession_rate = 5.0;
-  config.initial.nutation_rate = 2.0;
-  config.initial.velocity_x = 0.05;
+  config.initial = core_test::slipping_start();
   config.integrator.type = IntegratorType::kRadau5;
   config.integrator.tolerance = 1e-12;
   const auto simulator = make_simulator(config);
