@@ -758,10 +758,13 @@ void SpinningTopNode::on_timer(const ros::WallTimerEvent&) {
     if (!clock_heard || tops_.empty() || !tops_.front()->subscribed()) {
       // Said, not silent: a recorder subscribed to other names (an absolute /spinning_top/...
       // under a namespace) left the node waiting for ever without a word.
-      const std::string prefix = private_nh_.getNamespace() + "/" +
-                                 (tops_.empty() || tops_.front()->name().empty() ? std::string() : tops_.front()->name() + "/");
+      // Built only when the throttled line is printed, not at every turn of the timer.
+      const auto prefix = [this] {
+        return private_nh_.getNamespace() + "/" +
+               (tops_.empty() || tops_.front()->name().empty() ? std::string() : tops_.front()->name() + "/");
+      };
       ROS_INFO_THROTTLE(5.0, "spinning_top: ~wait_for_subscriber: no tick until %scontact_point and %sstate%s have a "
-                        "subscriber (record:=true starts rosbag record)", prefix.c_str(), prefix.c_str(),
+                        "subscriber (record:=true starts rosbag record)", prefix().c_str(), prefix().c_str(),
                         clock_role_ == ClockRole::kPublish ? " and /clock" : "");
       return;
     }
