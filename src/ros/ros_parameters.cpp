@@ -4,7 +4,10 @@
 
 #include <xmlrpcpp/XmlRpcValue.h>
 
+#include <ros/master.h>
 #include <ros/param.h>
+#include <ros/this_node.h>
+#include <xmlrpcpp/XmlRpcClient.h>
 
 #include <algorithm>
 #include <cstdio>
@@ -115,6 +118,33 @@ ParameterTree ParameterTree::fetch(const std::string& ns) {
 
 ParameterTree ParameterTree::fetch_members(const std::string& ns, const std::vector<std::string>& names) {
   ParameterTree tree;
+  // One call to the master for all of them (XML-RPC system.multicall): a spawn reads ~30
+  // members, and a call each cost ~0.2 ms. A master that does not take it gets a call each.
+  XmlRpc::XmlRpcValue calls, parameters, results;
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    XmlRpc::XmlRpcValue& call = calls[static_cast<int>(i)];
+    call["methodName"] = std::string("getParam");
+    call["params"][0] = ros::this_node::getName();
+    call["params"][1] = ns + "/" + names[i];
+  }
+  parameters[0] = calls;
+  XmlRpc::XmlRpcClient client(ros::master::getHost().c_str(), static_cast<int>(ros::master::getPort()), "/");
+  const bool done = !names.empty() && client.execute("system.multicall", parameters, results) &&
+                    !client.isFault() && results.getType() == XmlRpc::XmlRpcValue::TypeArray &&
+                    results.size() == static_cast<int>(names.size());
+  client.close();
+  if (done) {
+    for (std::size_t i = 0; i < names.size(); ++i) {
+      // A call's answer is [[code, status, value]] (code 1: set), or a fault (a struct).
+      XmlRpc::XmlRpcValue& wrapped = results[static_cast<int>(i)];
+      if (wrapped.getType() != XmlRpc::XmlRpcValue::TypeArray || wrapped.size() != 1) continue;
+      XmlRpc::XmlRpcValue& answer = wrapped[0];
+      if (answer.getType() == XmlRpc::XmlRpcValue::TypeArray && answer.size() == 3 &&
+          answer[0].getType() == XmlRpc::XmlRpcValue::TypeInt && static_cast<int>(answer[0]) == 1)
+        tree.root_[names[i]] = answer[2];
+    }
+    return tree;
+  }
   for (const std::string& name : names) {
     XmlRpc::XmlRpcValue value;
     if (ros::param::get(ns + "/" + name, value)) tree.root_[name] = value;

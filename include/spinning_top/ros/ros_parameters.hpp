@@ -22,8 +22,8 @@ class ParameterTree {
   ParameterTree() = default;
   /// The namespace `ns` (e.g. private_nh.getNamespace()); empty if it holds nothing.
   static ParameterTree fetch(const std::string& ns);
-  /// Only the members `names` of the namespace `ns` (a call each): for a namespace that also holds
-  /// much else (every top's URDF).
+  /// Only the members `names` of the namespace `ns` (one call to the master for all): for a
+  /// namespace that also holds much else (every top's URDF).
   static ParameterTree fetch_members(const std::string& ns, const std::vector<std::string>& names);
   /// The value at `key` ("initial/tilt"), false if absent.
   bool get(const std::string& key, XmlRpc::XmlRpcValue& value) const;
