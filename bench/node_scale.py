@@ -94,7 +94,7 @@ def main():
         first = statistics.median(costs[:tenth]) * 1e3
         last = statistics.median(costs[-tenth:]) * 1e3
         with open(log) as f:
-            account = [line.strip() for line in f if "unregistered" in line or "exit" in line.lower()]
+            account = [line.strip() for line in f if "unregister" in line or "exit" in line.lower() or "master did not" in line]
         lines.append(f"| {options.count} | {'paused' if options.paused else 'running'} | {first:.1f} | {last:.1f} | "
                      f"{sum(costs):.1f} | {exit_seconds:.2f} | {code} |")
         print(lines[-1], *account, sep="\n  ", flush=True)

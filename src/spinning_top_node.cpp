@@ -19,7 +19,7 @@ int main(int argc, char** argv) {
   using spinning_top::ros_front_end::SpinningTopNode;
   // Our own SIGINT handler (roscpp's would start its shutdown at once, in another thread): the
   // start stops between two steps, and a running node unregisters its topics in one call to the
-  // master before ROS shuts down (a second with 1,000 tops instead of seconds).
+  // master while ROS shuts down (under a second with 1,000 tops instead of seconds).
   ros::init(argc, argv, "spinning_top", ros::init_options::NoSigintHandler);
   std::signal(SIGINT, on_sigint);
   // Held outside the try: destroying the last NodeHandle shuts ROS (and its logging) down,
@@ -33,8 +33,10 @@ int main(int argc, char** argv) {
     SpinningTopNode node(nh, private_nh);
     // ros::spin(), ending at SIGINT as well as at a shutdown from elsewhere (rosnode kill).
     while (ros::ok() && !SpinningTopNode::stop_requested()) node.spin_once();
-    if (SpinningTopNode::stop_requested() && ros::ok()) node.unregister_at_exit();
-    ros::shutdown();
+    if (SpinningTopNode::stop_requested() && ros::ok())
+      node.shut_down_at_sigint();
+    else
+      ros::shutdown();
   } catch (const spinning_top::InvalidParameter& error) {
     ROS_FATAL("spinning_top: invalid parameter ~%s (%s)", error.parameter().c_str(), error.what());
     return 1;
