@@ -195,11 +195,15 @@ struct EventCubic {
     return 2.0 * (std::abs(c2) + std::abs(c3));
   }
   /// True if the event function cannot reach its threshold within the step (see allowance()).
-  bool clears_zero() const {
-    const double margin = allowance();
+  bool clears_zero() const { return stays_above(0.0); }
+  /// True if the function stays above `level` throughout the step: H's minimum exceeds it by
+  /// more than allowance(). The run's extremes (integration/range_tracker.hpp) skip with it the
+  /// steps that cannot hold a new least value.
+  bool stays_above(double level) const {
+    const double margin = level + allowance();
     // First the convex hull of H's Bernstein control points g0, g0 + m0/3, g1 - m1/3, g1 (the
     // convex hull property of the Bezier form; Farin, Curves and Surfaces for CAGD), which lies
-    // below H: no root-finding. It settles most steps of most runs (g far above zero).
+    // below H: no root-finding. It settles most steps of most runs (g far above the level).
     constexpr double kThird = 1.0 / 3.0;
     if (std::min(std::min(g0, g1), std::min(g0 + kThird * m0, g1 - kThird * m1)) > margin) return true;
     return minimum() > margin;

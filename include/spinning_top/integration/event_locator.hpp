@@ -14,6 +14,56 @@
 
 namespace spinning_top {
 
+/// Brent's minimisation of f on [a, b] (golden section and parabolic steps; Brent, Algorithms for
+/// Minimization without Derivatives, 1973, ch. 5) from an inner point x with value fx, down to
+/// `tolerance` in x. A non-finite f counts as +infinity. stop(u, f(u)) sees every new point;
+/// true ends the search there and returns true. On return (x, fx) is the least point found.
+/// The EventLocator stops it at the first triggered point; the RangeTracker runs it to the end.
+template <class F, class Stop>
+bool brent_minimum(const F& f, double a, double b, double& x, double& fx, double tolerance, const Stop& stop) {
+  constexpr double kGolden = 0.3819660112501051;  // (3 - sqrt(5)) / 2
+  double w = x, v = x, fw = fx, fv = fx, d = 0.0, e = 0.0;
+  for (int iteration = 0; iteration < 100; ++iteration) {
+    const double middle = 0.5 * (a + b);
+    if (std::abs(x - middle) <= 2.0 * tolerance - 0.5 * (b - a)) break;
+    bool parabolic = false;
+    if (std::abs(e) > tolerance) {
+      double r = (x - w) * (fx - fv), q = (x - v) * (fx - fw), p = (x - v) * q - (x - w) * r;
+      q = 2.0 * (q - r);
+      if (q > 0.0) p = -p;
+      q = std::abs(q);
+      const double previous = e;
+      e = d;
+      if (std::abs(p) < std::abs(0.5 * q * previous) && p > q * (a - x) && p < q * (b - x)) {
+        d = p / q;
+        const double u = x + d;
+        if (u - a < 2.0 * tolerance || b - u < 2.0 * tolerance) d = x < middle ? tolerance : -tolerance;
+        parabolic = true;
+      }
+    }
+    if (!parabolic) {
+      e = (x < middle ? b : a) - x;
+      d = kGolden * e;
+    }
+    const double u = x + (std::abs(d) >= tolerance ? d : std::copysign(tolerance, d));
+    const double fu_raw = f(u);
+    if (stop(u, fu_raw)) return true;
+    const double fu = std::isfinite(fu_raw) ? fu_raw : std::numeric_limits<double>::infinity();
+    if (fu <= fx) {
+      (u < x ? b : a) = x;
+      v = w, fv = fw, w = x, fw = fx, x = u, fx = fu;
+    } else {
+      (u < x ? a : b) = u;
+      if (fu <= fw || w == x) {
+        v = w, fv = fw, w = u, fw = fu;
+      } else if (fu <= fv || v == x || v == w) {
+        v = u, fv = fu;
+      }
+    }
+  }
+  return false;
+}
+
 /// The event locator of the stepping methods: after each accepted step (projected and guarded by
 /// the StepGuard), it bounds the event functions over the whole step through the step's
 /// interpolant, and locates the first event in it. Any interpolant will do: a method's dense
@@ -80,7 +130,7 @@ class EventLocator {
     const Eigen::Vector2d rate_end = event_rates(model, y_end, g_end, f_end);
     const double dt = t_end - t_;
     bool search = false, suspect[event_index::kCount];
-    EventCubic cubic[event_index::kCount];
+    EventCubic (&cubic)[event_index::kCount] = cubic_;
     for (int i = 0; i < event_index::kCount; ++i) {
       cubic[i] = EventCubic{g_[i], g_end[i], dt * rate_[i], dt * rate_end[i]};
       // Non-finite rates (a singular f) cannot clear the step: it is searched.
@@ -102,6 +152,10 @@ class EventLocator {
   /// (diagnostics: the cost of the search).
   long searches() const { return searches_; }
   long interpolant_evaluations() const { return interpolant_evaluations_; }
+  /// The event functions' cubics over the last step located (whether or not it held an event),
+  /// which the RangeTracker screens with.
+  using StepCubics = EventCubic[event_index::kCount];
+  const StepCubics& step_cubics() const { return cubic_; }
 
  private:
   static constexpr int kMaxSamples = 7;  // both ends, 3 fixed interior points, 2 cubic minima
@@ -201,56 +255,20 @@ class EventLocator {
   template <class StateAt>
   bool dip_below_zero(const Model& model, int i, double t0, double a, double b, double x, double fx,
                       const StateAt& state_at, double& found_offset, double& found_value) const {
-    constexpr double kGolden = 0.3819660112501051;  // (3 - sqrt(5)) / 2
     const double tolerance = 1e-9 * (b - a) + std::numeric_limits<double>::min();
-    double w = x, v = x, fw = fx, fv = fx, d = 0.0, e = 0.0;
-    for (int iteration = 0; iteration < 100; ++iteration) {
-      const double middle = 0.5 * (a + b);
-      if (std::abs(x - middle) <= 2.0 * tolerance - 0.5 * (b - a)) break;
-      bool parabolic = false;
-      if (std::abs(e) > tolerance) {
-        double r = (x - w) * (fx - fv), q = (x - v) * (fx - fw), p = (x - v) * q - (x - w) * r;
-        q = 2.0 * (q - r);
-        if (q > 0.0) p = -p;
-        q = std::abs(q);
-        const double previous = e;
-        e = d;
-        if (std::abs(p) < std::abs(0.5 * q * previous) && p > q * (a - x) && p < q * (b - x)) {
-          d = p / q;
-          const double u = x + d;
-          if (u - a < 2.0 * tolerance || b - u < 2.0 * tolerance) d = x < middle ? tolerance : -tolerance;
-          parabolic = true;
-        }
-      }
-      if (!parabolic) {
-        e = (x < middle ? b : a) - x;
-        d = kGolden * e;
-      }
-      const double u = x + (std::abs(d) >= tolerance ? d : std::copysign(tolerance, d));
-      const double gu = event_functions(model, state_at(t0 + u))[i];
-      if (std::isfinite(gu) && is_triggered(i, gu)) {
-        found_offset = u;
-        found_value = gu;
-        return true;
-      }
-      const double fu = std::isfinite(gu) ? gu : std::numeric_limits<double>::infinity();
-      if (fu <= fx) {
-        (u < x ? b : a) = x;
-        v = w, fv = fw, w = x, fw = fx, x = u, fx = fu;
-      } else {
-        (u < x ? a : b) = u;
-        if (fu <= fw || w == x) {
-          v = w, fv = fw, w = u, fw = fu;
-        } else if (fu <= fv || v == x || v == w) {
-          v = u, fv = fu;
-        }
-      }
-    }
-    return false;
+    auto g = [&](double u) { return event_functions(model, state_at(t0 + u))[i]; };
+    auto triggered = [&](double u, double gu) {
+      if (!(std::isfinite(gu) && is_triggered(i, gu))) return false;
+      found_offset = u;
+      found_value = gu;
+      return true;
+    };
+    return brent_minimum(g, a, b, x, fx, tolerance, triggered);
   }
 
   double t_ = 0.0;
   Eigen::Vector2d g_ = Eigen::Vector2d::Zero(), rate_ = Eigen::Vector2d::Zero();  // at the step's start
+  EventCubic cubic_[event_index::kCount] = {};  // of the last step located
   long searches_ = 0, interpolant_evaluations_ = 0;
 };
 
