@@ -108,6 +108,7 @@ class HybridSimulator final : public Simulator {
     if (hops_.lift_offs > 0) return std::nullopt;  // the tip has left the floor: ranges of one contact phase only
     return contact_->motion_range();
   }
+  void track_motion_range() override { contact_->track_motion_range(); }
 
   bool reset() override {
     const IntegratorChoice before = integrator_choice();

@@ -90,20 +90,35 @@ class SceneSimulator final : public ContactPhase<Model> {
 
   std::optional<MotionRange> motion_range() const override {
     if (updated_) return std::nullopt;  // the driver's range starts at the update
-    const std::optional<ClosedFormRange> range = driver_.closed_form_range();
-    if (!range) return std::nullopt;
+    double one_minus_cos_max_tilt = 0.0, least_normal_force = 0.0;
+    if (const std::optional<ClosedFormRange> range = driver_.closed_form_range()) {
+      one_minus_cos_max_tilt = range->one_minus_cos_max_tilt;
+      least_normal_force = config_.top.mass * range->least_normal_force_per_mass;
+    } else if (const RangeTracker<Model>* tracker = driver_.range_tracker(); tracker && range_from_start_) {
+      one_minus_cos_max_tilt = tracker->one_minus_cos_max_tilt();
+      least_normal_force = tracker->least_normal_force();
+    } else {
+      return std::nullopt;
+    }
     // tilt = 2 asin(sqrt((1 - cos tilt) / 2)): accurate near the vertical, where acos is not.
-    const double half = std::clamp(0.5 * range->one_minus_cos_max_tilt, 0.0, 1.0);
-    double least_normal_force = config_.top.mass * range->least_normal_force_per_mass;
+    const double half = std::clamp(0.5 * one_minus_cos_max_tilt, 0.0, 1.0);
     // A run that ended with lift_off shows R = 0 there, never the floor pulling (snapshot()).
     if (driver_.event() == Event::kLiftOff) least_normal_force = std::max(least_normal_force, 0.0);
     return MotionRange{2.0 * std::asin(std::sqrt(half)), least_normal_force};
+  }
+
+  void track_motion_range() override {
+    // From the run's start (no step taken since the reset), or from the next reset.
+    range_from_start_ = driver_.steps() == 0 && !updated_;
+    tracking_range_ = true;
+    driver_.track_range(model_);
   }
 
   bool reset() override {
     const IntegratorChoice before = integrator_choice();
     driver_.reset(model_, 0.0, model_.initial_state());
     updated_ = false;
+    range_from_start_ = true;  // a tracking driver starts its range again (inert otherwise)
     earlier_work_ = 0;
     return switched(before);
   }
@@ -140,6 +155,7 @@ class SceneSimulator final : public ContactPhase<Model> {
     model_ = std::move(model);
     earlier_work_ += driver_.work();
     driver_ = std::move(driver);
+    if (tracking_range_) driver_.track_range(model_);  // from here, for the ranges after the next reset()
     updated_ = true;
     if (event != Event::kNone) driver_.stop(event);  // a stopped run stays stopped until reset()
     return switched(before);
@@ -188,6 +204,8 @@ class SceneSimulator final : public ContactPhase<Model> {
   Model model_;
   Driver driver_;
   bool updated_ = false;  ///< update() restarted the driver mid-run
+  bool tracking_range_ = false;   ///< track_motion_range() was called
+  bool range_from_start_ = false;  ///< track_motion_range() was called at the run's start (or a reset since)
   long earlier_work_ = 0;  ///< work units of the drivers before the last update() or restart()
 };
 

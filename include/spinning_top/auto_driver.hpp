@@ -14,6 +14,7 @@
 #include <utility>
 #include <variant>
 
+#include "spinning_top/integration/range_tracker.hpp"
 #include "spinning_top/integrators/registry_rows.hpp"
 #include "spinning_top/method_refusal.hpp"
 #include "spinning_top/simulator.hpp"
@@ -98,6 +99,14 @@ class AutoDriver {
   std::optional<ClosedFormRange> closed_form_range() const {
     return std::visit([](const auto& c) { return c.driver.closed_form_range(); }, driver_);
   }
+  /// Driver::track_range() on the running candidate, and on every candidate started after it.
+  void track_range(const Model& model) {
+    tracking_ = true;
+    std::visit([&](auto& c) { c.driver.track_range(model); }, driver_);
+  }
+  const RangeTracker<Model>* range_tracker() const {
+    return std::visit([](const auto& c) { return c.driver.range_tracker(); }, driver_);
+  }
 
  private:
   /// The candidate of settings.type, not started.
@@ -123,13 +132,19 @@ class AutoDriver {
       return;
     }
     Candidates next = make(settings);
-    std::visit([&](auto& c) { c.driver.reset(model, t, y); }, next);
+    std::visit(
+        [&](auto& c) {
+          c.driver.reset(model, t, y);
+          if (tracking_) c.driver.track_range(model);
+        },
+        next);
     driver_ = std::move(next);
   }
 
   AutoPlan plan_;
   Candidates driver_;
   IntegratorChoice choice_;
+  bool tracking_ = false;  ///< track_range() was called: each candidate started tracks too
 };
 
 }  // namespace spinning_top

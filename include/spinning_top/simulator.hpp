@@ -191,10 +191,22 @@ class Simulator {
   /// "auto: dop853, tolerance 1e-12 (exact refused: <its reason>)".
   virtual std::string integrator_description() const = 0;
   virtual IntegratorChoice integrator_choice() const = 0;
-  /// The run's extremes over [0, time()] in closed form, where the method has them: exact, from
-  /// the turning points of the nutation and R as a function of e_Zz (no peak between samples can
-  /// be missed). nullopt for a time-stepper, and after an update() (the run then had two models).
+  /// The run's extremes over [0, time()], where the method has them (no peak between samples can
+  /// be missed):
+  ///  - exact: in closed form, from the turning points of the nutation and R as a function of
+  ///    e_Zz;
+  ///  - a method that answers from an interpolant (dopri5, dop853, radau5, and auto's choices of
+  ///    them) once track_motion_range() was called at the run's start: from the interpolants of
+  ///    its steps (integration/range_tracker.hpp), to the method's own accuracy.
+  /// nullopt otherwise (fixed-step methods: their states are the step ends a front end samples),
+  /// after an update() (the run then had two models) and once the tip has left the floor.
   virtual std::optional<MotionRange> motion_range() const = 0;
+  /// Makes motion_range() available for a time-stepper that answers from an interpolant: from
+  /// now on, and after every reset(), it follows the extremes through its steps. Its steps and
+  /// states stay the same, bit for bit; each step costs a screen more, and each new extreme a
+  /// search (a case of issue 21's sweeps: 10 s of the viscous toy top, about 15 % more than
+  /// untracked). Called after the run has started, the range begins at the next reset().
+  virtual void track_motion_range() = 0;
   /// Accepted integration steps since the last reset (a transition counts one).
   virtual long steps() const = 0;
   /// The work since the last reset in steps of the work budget (work_budget.hpp), what a run's

@@ -25,6 +25,7 @@
 #include "spinning_top/hot_path.hpp"
 #include "spinning_top/integration/controllers.hpp"
 #include "spinning_top/integration/event_locator.hpp"
+#include "spinning_top/integration/range_tracker.hpp"
 #include "spinning_top/integration/step_guard.hpp"
 #include "spinning_top/integration/steppers.hpp"
 #include "spinning_top/work_budget.hpp"
@@ -51,6 +52,10 @@ class Driver {
  public:
   using State = typename Model::State;
   static constexpr IntegratorKind kKind = Controller::kKind;
+  /// Whether track_range() can follow the run's extremes: a method that answers from an
+  /// interpolant between its steps (dopri5, dop853, radau5). A fixed step's states are its step
+  /// ends, which a front end samples; a closed form has its extremes in closed form.
+  static constexpr bool kTracksRange = Stepper::kInterpolatedAnswers && !Stepper::kClosedForm;
 
   /// Built from what its controller takes: the integrator settings, or its step or tolerance alone.
   template <class Setting>
@@ -69,7 +74,24 @@ class Driver {
     restart_work_ = stepper_.work() - before;
     steps_ = rejected_ = work_ = 0;
     begin(model, t, start, finite);
+    if constexpr (kTracksRange) {
+      if (tracking_) start_range(model);
+    }
   }
+
+  /// From the current state on, and after every reset, the run's least R and largest tilt are
+  /// followed through the steps' interpolants (range_tracker.hpp), at the cost of a screen per
+  /// step and a search per new extreme; the steps and states stay the same, bit for bit. Where
+  /// kTracksRange is false it does nothing (range_tracker() stays null).
+  void track_range(const Model& model) {
+    if constexpr (kTracksRange) {
+      tracking_ = true;
+      start_range(model);
+    }
+  }
+  /// The extremes since the tracking started (or the last reset) up to time(), or null if
+  /// track_range() was not called (or cannot track).
+  const RangeTracker<Model>* range_tracker() const { return kTracksRange && tracking_ ? &tracker_ : nullptr; }
 
   /// Advances to t_target. Returns the event that ended the run (then time() is the event's
   /// time, <= t_target), or kNone. With a budget that runs out first it returns kNone with
@@ -78,6 +100,14 @@ class Driver {
   Event advance_to(const Model& model, double t_target, const WorkBudget& budget = WorkBudget()) {
     if (event_ != Event::kNone || t_target <= t_out_) return event_;
     BudgetMeter meter(budget);
+    if constexpr (kTracksRange) {
+      // The rest of the last step beyond the last answer, while its interpolant is still valid.
+      if (tracking_) {
+        const long before = stepper_.work();
+        fold_range(model, t_target);
+        work_ += stepper_.work() - before;
+      }
+    }
     const long start = work();
     for (;;) {
       while (t_ < t_target && pending_ == Event::kNone) {
@@ -91,6 +121,7 @@ class Driver {
       if (!continue_after(model)) {
         t_out_ = t_;
         y_out_ = y_;
+        if constexpr (kTracksRange) tracker_.commit();
         return event_ = pending_;
       }
       if (event_ != Event::kNone) return event_;  // the mapped state is itself invalid
@@ -108,6 +139,7 @@ class Driver {
     }
     t_out_ = t_target;
     y_out_ = y;
+    if constexpr (kTracksRange) tracker_.commit();
     return Event::kNone;
   }
 
@@ -207,6 +239,13 @@ class Driver {
       }
       return true;
     } else {
+      if constexpr (kTracksRange) {
+        if (tracking_) {
+          range_step_t0_ = t_;
+          range_step_y0_ = y_;
+          range_step_t1_ = step.t_end;
+        }
+      }
       State y_end = attempt.y1;
       if (!StepGuard<Model>::project(y_end)) return false;
       State f_end;
@@ -230,6 +269,12 @@ class Driver {
         y_ = y_end;
         f_ = f_end;
         t_ = step.t_end;
+        if constexpr (kTracksRange) {
+          if (tracking_) {
+            g_at_t_ = g_end;
+            fold_range(model, t_target);
+          }
+        }
         return true;
       }
       // The located state comes from the step's interpolant, which may break the balance where
@@ -242,8 +287,39 @@ class Driver {
       pending_ = located.event;
       t_ = located.time;
       y_ = located.state;
+      if constexpr (kTracksRange) {
+        if (tracking_) {
+          g_at_t_ = event_functions(model, y_);
+          fold_range(model, t_target);
+        }
+      }
       return true;
     }
+  }
+
+  /// The range starts at the reported state, the end of the steps so far (a reset, or between
+  /// requests that ended at a step's end).
+  void start_range(const Model& model) {
+    tracker_.start(model, y_out_);
+    range_folded_to_ = t_;
+  }
+
+  /// Folds the last step's piece from where the range has reached to min(t_, t_target), the part
+  /// of the run known so far (the step's end, its event, or the request inside it), while the
+  /// step's interpolant is valid (range_tracker.hpp).
+  void fold_range(const Model& model, double t_target) {
+    const double to = std::min(t_, t_target);
+    if (!(to > range_folded_to_)) return;
+    auto state_at = stepper_.interpolant(model, range_step_t0_, range_step_y0_);
+    if (to == t_) {
+      tracker_.fold(model, range_step_t0_, range_step_t1_, locator_.step_cubics(), range_folded_to_, to, y_, g_at_t_,
+                    state_at);
+    } else {
+      const State y = state_at(to);  // the answer's state, computed again
+      tracker_.fold(model, range_step_t0_, range_step_t1_, locator_.step_cubics(), range_folded_to_, to, y,
+                    event_functions(model, y), state_at);
+    }
+    range_folded_to_ = to;
   }
 
   Stepper stepper_;
@@ -262,6 +338,13 @@ class Driver {
   long steps_ = 0, rejected_ = 0;
   long work_ = 0;  ///< units charged since reset (work() adds the floor of one budget step per step)
   long restart_work_ = 0;
+  // The extremes (track_range()): the tracker, the step it folds ([t0, t1] from y0; the event
+  // functions at t_), and how far it has folded.
+  bool tracking_ = false;
+  RangeTracker<Model> tracker_;
+  double range_step_t0_ = 0.0, range_step_t1_ = 0.0, range_folded_to_ = 0.0;
+  State range_step_y0_ = State::Zero();
+  Eigen::Vector2d g_at_t_ = Eigen::Vector2d::Zero();
   /// The driver's own work after a step, in units: the event functions, the guard and the
   /// projection (1), and f at the step's end where the method does not hand it over (1).
   static constexpr long kStepChecksWork = Stepper::kClosedForm ? 0 : Stepper::kFsal ? 1 : 2;
