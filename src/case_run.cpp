@@ -95,9 +95,11 @@ CaseOutcome run_case_with(const SceneConfig& config, const CaseSettings& setting
     outcome.max_tilt = std::max(outcome.max_tilt, tilt_of(sample.attitude));
     worst_drift = std::max(worst_drift, std::abs(balance(sample) - balance0));
   };
-  // The start, then: closed form (exact), one request to the end, and the extremes over the whole
-  // run from the method, exact where samples would miss a peak between them; a time-stepper, the
+  // The start, then: where the method has the run's extremes (exact's closed form, an
+  // interpolating time-stepper's tracked range), one request to the end, and the extremes over
+  // the whole run from the method, which no peak between samples escapes; a fixed step, its
   // samples. The state where the steps ran out is the case's end.
+  if (allow_closed_form) simulator->track_motion_range();
   const bool closed_form = allow_closed_form && simulator->motion_range().has_value();
   const SampleTimes times(settings.duration, settings.sample_rate);
   const SampledRun run =
@@ -113,8 +115,8 @@ CaseOutcome run_case_with(const SceneConfig& config, const CaseSettings& setting
     }
   }
   if (closed_form && simulator->hops().lift_offs > 0) {
-    // The tip left the floor: the extremes of a closed form's contact phase no longer cover the
-    // run. Run the case again, sampled as a time-stepper's (the hops' own figures are exact).
+    // The tip left the floor: the extremes of the first contact phase no longer cover the run.
+    // Run the case again, sampled (the hops' own figures are exact).
     return run_case_with(config, settings, /*allow_closed_form=*/false);
   }
   outcome.event = run.event;

@@ -96,7 +96,7 @@ TEST(MotionRange, TorqueFreeTopMatchesSamples) {
   report("torque-free: exact - sampled largest tilt [rad]", exact->max_tilt - dense.max_tilt);
 }
 
-TEST(MotionRange, NoneForTimeSteppersAndAfterALiveUpdate) {
+TEST(MotionRange, NoneForAnUntrackedTimeStepperAndAfterALiveUpdate) {
   EXPECT_FALSE(make_simulator(toy(SceneType::kFixedTip, 0.3, 150.0, IntegratorType::kDop853))->motion_range());
   const auto sim = make_simulator(toy(SceneType::kFixedTip, 0.3, 150.0, IntegratorType::kAuto));
   ASSERT_TRUE(sim->motion_range());
@@ -106,6 +106,98 @@ TEST(MotionRange, NoneForTimeSteppersAndAfterALiveUpdate) {
   EXPECT_FALSE(sim->motion_range());  // one closed form would describe only part of the run
   sim->reset();
   EXPECT_TRUE(sim->motion_range());
+
+  // Tracked (issue 21): from the start, through an update (none) and a reset (again).
+  const auto dop853 = make_simulator(toy(SceneType::kViscous, 0.3, 150.0, IntegratorType::kDop853));
+  dop853->track_motion_range();
+  ASSERT_TRUE(dop853->motion_range());
+  dop853->advance_to(0.1);
+  EXPECT_TRUE(dop853->motion_range());
+  dop853->update(top, dop853->config().integrator);
+  EXPECT_FALSE(dop853->motion_range());
+  dop853->reset();
+  EXPECT_TRUE(dop853->motion_range());
+  // Asked for after the start, the range would miss the start: none until the next reset.
+  const auto late = make_simulator(toy(SceneType::kViscous, 0.3, 150.0, IntegratorType::kAuto));
+  late->advance_to(0.1);
+  late->track_motion_range();
+  EXPECT_FALSE(late->motion_range());
+  late->reset();
+  EXPECT_TRUE(late->motion_range());
+  // A fixed step has no interpolant to track: its states are its samples.
+  SceneConfig fixed = toy(SceneType::kViscous, 0.3, 150.0, IntegratorType::kRk4);
+  fixed.integrator.step = 1e-4;
+  const auto rk4 = make_simulator(fixed);
+  rk4->track_motion_range();
+  EXPECT_FALSE(rk4->motion_range());
+}
+
+// dop853's tracked extremes (issue 21) against exact's closed form over 10 s of the fixed tip
+// (a 1e-13 run: its own error ~1e-11 rad), both tops of toy() and a near-vertical one where
+// 1 - cos(tilt) = 4.5e-9 (the tracker's tilt function is exact there, where 1 - e_Zz would
+// keep 8 digits).
+TEST(MotionRange, TrackedExtremesOfDop853MatchTheClosedForm) {
+  for (double tilt : {1e-4, 0.3, 1.0}) {
+    const SceneConfig c = toy(SceneType::kFixedTip, tilt, 150.0, IntegratorType::kDop853);
+    const auto tracked = make_simulator(c);
+    tracked->track_motion_range();
+    ASSERT_EQ(tracked->advance_to(10.0), Event::kNone);
+    SceneConfig e = c;
+    e.integrator.type = IntegratorType::kExact;
+    const auto exact = make_simulator(e);
+    exact->advance_to(10.0);
+    const std::optional<MotionRange> a = tracked->motion_range(), b = exact->motion_range();
+    ASSERT_TRUE(a && b);
+    const double mg = c.top.mass * c.top.gravity;
+    EXPECT_NEAR(a->max_tilt, b->max_tilt, 1e-10 * std::max(tilt, 0.1)) << "tilt " << tilt;
+    EXPECT_NEAR(a->min_normal_force, b->min_normal_force, 1e-9 * mg) << "tilt " << tilt;
+    if (tilt == 0.3) {
+      report("fixed_tip 10 s: tracked dop853 - exact largest tilt [rad]", a->max_tilt - b->max_tilt);
+      report("fixed_tip 10 s: tracked dop853 - exact least R [m g]", (a->min_normal_force - b->min_normal_force) / mg);
+    }
+  }
+}
+
+// The viscous top has no closed form: the tracked extremes bound dense samples (every 5 us over
+// 1 s, which resolve a nutation peak to ~4e-8 of its amplitude, and every 0.25 us over the slip's
+// relaxation at the start) and exceed them by no more than that, from weak friction to the stiff end (k = 500: lambda = 5e4/s, radau5 under auto); and
+// tracking changes no state of the run, bit for bit.
+TEST(MotionRange, TrackedExtremesOfTheViscousTopBoundDenseSamples) {
+  for (double friction : {0.02, 5.0, 500.0}) {
+    SceneConfig c = toy(SceneType::kViscous, 0.3, 150.0, IntegratorType::kAuto);
+    c.top.friction = friction;
+    c.integrator.tolerance = defaults::kTolerance;
+    const double duration = 1.0;
+    const auto tracked = make_simulator(c);
+    tracked->track_motion_range();
+    const auto plain = make_simulator(c);
+    MotionRange dense{0.0, std::numeric_limits<double>::infinity()};
+    // Every 0.25 us over the first 2 ms, where the slip relaxes at lambda (20 us at k = 500),
+    // then every 5 us.
+    std::vector<double> times;
+    for (long i = 0; i < 8000; ++i) times.push_back(i * 2.5e-7);
+    for (long i = 400; i <= std::lround(duration / 5e-6); ++i) times.push_back(i * 5e-6);
+    for (double t : times) {
+      ASSERT_EQ(tracked->advance_to(t), Event::kNone);
+      ASSERT_EQ(plain->advance_to(t), Event::kNone);
+      const Snapshot s = plain->snapshot(), u = tracked->snapshot();
+      ASSERT_TRUE(s.attitude.coeffs() == u.attitude.coeffs() && s.body_rates == u.body_rates) << "t " << t;
+      dense.max_tilt = std::max(dense.max_tilt, tilt_of(s.attitude));
+      dense.min_normal_force = std::min(dense.min_normal_force, s.outputs.normal_force);
+    }
+
+    const std::optional<MotionRange> range = tracked->motion_range();
+    ASSERT_TRUE(range);
+    const double mg = c.top.mass * c.top.gravity;
+    EXPECT_GE(range->max_tilt, dense.max_tilt - 1e-13) << "k " << friction;
+    EXPECT_LE(range->max_tilt, dense.max_tilt + 1e-8) << "k " << friction;
+    EXPECT_LE(range->min_normal_force, dense.min_normal_force + 1e-13 * mg) << "k " << friction;
+    EXPECT_GE(range->min_normal_force, dense.min_normal_force - 1e-8 * mg) << "k " << friction;
+    if (friction == 5.0) {
+      report("viscous k 5, 1 s: tracked - dense largest tilt [rad]", range->max_tilt - dense.max_tilt);
+      report("viscous k 5, 1 s: tracked - dense least R [m g]", (range->min_normal_force - dense.min_normal_force) / mg);
+    }
+  }
 }
 
 // A spinless top released at 0.3 rad falls: run_case ends at the fall with the tilt at pi/2,
@@ -124,20 +216,55 @@ TEST(RunCase, EndsAtTheFirstEventWithTheSimulatorsTimeAndState) {
   EXPECT_LE(o.energy_balance_error, 1e-14);
 }
 
-// A time-stepper's case samples at sample_rate; its extremes are those of the samples.
-TEST(RunCase, TimeStepperExtremesAreThoseOfItsSamples) {
-  SceneConfig c = toy(SceneType::kFixedTip, 0.3, 150.0, IntegratorType::kDop853);
+// A fixed-step case samples at sample_rate; its extremes are those of the samples.
+TEST(RunCase, FixedStepExtremesAreThoseOfItsSamples) {
+  SceneConfig c = toy(SceneType::kFixedTip, 0.3, 150.0, IntegratorType::kRk4);
+  c.integrator.step = 1e-4;
   CaseSettings settings;
   settings.duration = 0.5;
   settings.sample_rate = 1000.0;
   const CaseOutcome o = run_case(c, settings);
-  const MotionRange dense = sampled(c, 0.5, 1e-3);
+  const auto sim = make_simulator(c);
+  MotionRange samples{0.0, std::numeric_limits<double>::infinity()};
+  for (int i = 0; i <= 500; ++i) {
+    sim->advance_to(i / 1000.0);
+    samples.max_tilt = std::max(samples.max_tilt, tilt_of(sim->snapshot().attitude));
+    samples.min_normal_force = std::min(samples.min_normal_force, sim->snapshot().outputs.normal_force);
+  }
   EXPECT_EQ(o.event, Event::kNone);
   EXPECT_EQ(o.end_time, 0.5);
-  EXPECT_EQ(o.max_tilt, dense.max_tilt);
-  EXPECT_EQ(o.min_normal_force, dense.min_normal_force);
-  EXPECT_LT(o.energy_balance_error, 1e-10);
+  EXPECT_EQ(o.max_tilt, samples.max_tilt);
+  EXPECT_EQ(o.min_normal_force, samples.min_normal_force);
+  EXPECT_LT(o.energy_balance_error, 1e-8);
   EXPECT_GT(o.steps, 0);
+}
+
+// dop853's case takes its extremes from the tracked interpolants (issue 21), not from samples:
+// at a sample rate of 50 Hz (which a tracked case does not use) the extremes are still those of
+// dense samples, where samples every 20 ms miss the nutation's peaks (its least R is at the
+// release, a sample too); the case's end state is the simulator's.
+TEST(RunCase, Dop853ExtremesAreTrackedNotSampled) {
+  SceneConfig c = toy(SceneType::kViscous, 0.3, 150.0, IntegratorType::kDop853);
+  c.initial.precession_rate = 0.0;  // released at rest but for the spin: a nutation of ~0.01 rad
+  CaseSettings settings;
+  settings.duration = 0.5;
+  settings.sample_rate = 50.0;
+  const CaseOutcome o = run_case(c, settings);
+  const MotionRange coarse = sampled(c, 0.5, 1.0 / settings.sample_rate), dense = sampled(c, 0.5, 5e-6);
+  const double mg = c.top.mass * c.top.gravity;
+  EXPECT_EQ(o.event, Event::kNone);
+  EXPECT_EQ(o.end_time, 0.5);
+  EXPECT_GE(o.max_tilt, dense.max_tilt - 1e-13);
+  EXPECT_LE(o.max_tilt, dense.max_tilt + 1e-8);
+  EXPECT_GT(o.max_tilt, coarse.max_tilt + 1e-6);  // the peaks between the 50 Hz samples
+  EXPECT_LE(o.min_normal_force, dense.min_normal_force + 1e-13 * mg);
+  EXPECT_GE(o.min_normal_force, dense.min_normal_force - 1e-8 * mg);
+  const auto sim = make_simulator(c);
+  sim->advance_to(0.5);
+  EXPECT_EQ(o.final_tilt, tilt_of(sim->snapshot().attitude));
+  EXPECT_LT(o.energy_balance_error, 1e-10);
+  report("dop853 case, 0.5 s: tracked - 50 Hz samples largest tilt [rad]", o.max_tilt - coarse.max_tilt);
+  report("dop853 case, 0.5 s: tracked - dense largest tilt [rad]", o.max_tilt - dense.max_tilt);
 }
 
 TEST(RunCase, StopsAtItsStepBudget) {

@@ -57,10 +57,11 @@ SampledRun sample_run(Simulator& simulator, long long count, const std::function
 
 struct CaseSettings {
   double duration = 10.0;       ///< [s] run until then, or to the first event
-  /// [Hz] for a time-stepper, the states at which the row's extremes and energy balance are
-  /// taken (as `simulate`'s rows; the end state is always one). 1 kHz is the node's tick: 18
-  /// samples per nutation of the toy top. Not used by exact, whose extremes are in closed form
-  /// (Simulator::motion_range) and which is asked for the end state only.
+  /// [Hz] for a fixed-step method, and for any method after a lift-off, the states at which the
+  /// row's extremes and energy balance are taken (as `simulate`'s rows; the end state is always
+  /// one). 1 kHz is the node's tick: 18 samples per nutation of the toy top. Not used while the
+  /// method has the extremes itself (Simulator::motion_range: exact's closed form, the tracked
+  /// range of dopri5, dop853, radau5 and auto): those are asked for the end state only.
   double sample_rate = 1000.0;
   /// Integration steps the case may take (as `simulate --max-steps`); `exact` takes none.
   double max_steps = 1e8;
@@ -76,13 +77,14 @@ struct CaseOutcome {
   Event event = Event::kNone;    ///< the terminal event, kNone if the run reached the duration
   bool out_of_steps = false;     ///< stopped by max_steps before the duration or an event
   double end_time = 0.0;         ///< [s] the duration, the event's time, or where the steps ran out
-  double min_normal_force = 0.0; ///< [N] least R over the run: exact's closed form, else the samples
+  double min_normal_force = 0.0; ///< [N] least R over the run: the method's (motion_range), else the samples
   double max_tilt = 0.0;         ///< [rad] largest angle of the axis from the vertical, likewise
   double final_tilt = 0.0;       ///< [rad] at end_time
   double final_energy = 0.0;     ///< [J] E at end_time
   double friction_work = 0.0;    ///< [J] W, the work done against friction by end_time (viscous)
-  /// max |B(t) - B(0)| / (|B(0)| + m g h) over the samples (exact: at the end), B = E - C wZ^2/2
-  /// + W: the energy balance the monitor guards (events.hpp); round-off for a correct run.
+  /// max |B(t) - B(0)| / (|B(0)| + m g h) over the samples (at the end where the method has the
+  /// extremes: motion_range), B = E - C wZ^2/2 + W: the energy balance the monitor guards
+  /// (events.hpp); round-off for a correct run.
   double energy_balance_error = 0.0;
   IntegratorType method = IntegratorType::kAuto;  ///< what ran at the end (never kAuto)
   bool fallback = false;         ///< auto ran its fallback (exact refused the state)
