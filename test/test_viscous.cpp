@@ -3,14 +3,17 @@
 // approaches the fixed tip, and the default integrator's accuracy from k = 0 to m/k = 1e-8 s.
 #include <gtest/gtest.h>
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <functional>
 #include <memory>
 #include <string>
 
 #include "core_test_support.hpp"
 #include "spinning_top/integrators/registry_rows.hpp"
+#include "spinning_top/integrators/jacobian.hpp"
 #include "spinning_top/integrators/radau.hpp"
 #include "spinning_top/scenes/viscous.hpp"
 
@@ -288,6 +291,61 @@ void expect_default_meets_target(const char* name, const SceneConfig& config, do
   // measured at most 1.2e-13 J; 1e-10 of the toy's m g h (2e-12 J, G 2 pm lower) is far below
   // any physical effect and catches a work integral off by one step's worth.
   EXPECT_LE(e.balance, 2e-12) << name << ", k = " << config.top.friction;
+}
+
+/// The state of slipping_top() with G's horizontal velocity set so that the tip is at rest
+/// (v_P = v_G - h (wY e_X - wX e_Y) = 0): the slow manifold of stiff friction, where F = 0.
+Viscous::State pinned_tip_state(const Viscous& model) {
+  Viscous::State y = model.initial_state();
+  const Eigen::Matrix3d rotation = Eigen::Quaterniond(y[0], y[1], y[2], y[3]).normalized().toRotationMatrix();
+  const double h = model.parameters().tip_distance;
+  const double wx = y[state_index::kOmegaX], wy = y[state_index::kOmegaY];
+  const Eigen::Vector3d tip_offset_velocity = h * (wy * rotation.col(0) - wx * rotation.col(1));
+  y[Viscous::kVx] = tip_offset_velocity.x();
+  y[Viscous::kVy] = tip_offset_velocity.y();
+  return y;
+}
+
+TEST(ViscousStiffPart, IsTheFrictionsPartOfTheJacobian) {
+  // RADAU5's low-rank Newton (radau.hpp) takes U V of stiff_part() for df/dy. f = g(y) + U(y) F(y)
+  // with F = -k v_P(y) and V = dF/dy, so J - U V = dg/dy + (dU/dy) F: (1) the rows of v_G and
+  // W are exactly U V (g = 0 there, and U of W' = k |v_P|^2 is -2 v_P, dW'/dy = 2 k v_P dv_P/dy);
+  // (2) on the slow manifold (F = 0) J - U V is the frictionless top's dg/dy, the same at every
+  // k, while U V grows as k. J by central differences: error ~1e-11 of |J| (jacobian.hpp),
+  // ~1e-5 of U V's largest entry (k / m = 1e7 1/s at k = 1e6); both bounds below are 100x that.
+  // Measured: see the output.
+  using Jacobian = Eigen::Matrix<double, Viscous::kStateSize, Viscous::kStateSize>;
+  const auto remainder = [](const Viscous& model, const Viscous::State& y, double& stiff_size) {
+    Jacobian j;
+    finite_difference_jacobian(model, y, j);
+    Viscous::StiffColumns u;
+    Viscous::StiffRows v;
+    EXPECT_TRUE(model.stiff_part(y, u, v));
+    const Jacobian uv = u * v;
+    stiff_size = uv.cwiseAbs().maxCoeff();
+    return Jacobian(j - uv);
+  };
+  double stiff_size = 0.0;
+  for (const double k : {1.0, 1e3, 1e6}) {
+    const Viscous model = slipping_top(k);
+    const Jacobian r = remainder(model, model.initial_state(), stiff_size);
+    double rows_error = 0.0;
+    for (const int row : {Viscous::kVx, Viscous::kVy, Viscous::kWork})
+      rows_error = std::max(rows_error, r.row(row).cwiseAbs().maxCoeff());
+    std::printf("[ measured ] k = %g, sliding: |U V| %.3g, v_G and W rows of J - U V %.3g\n", k, stiff_size,
+                rows_error);
+    EXPECT_LT(rows_error, 1e-9 * stiff_size);
+  }
+  const Viscous soft = slipping_top(1e2), stiff = slipping_top(1e6);
+  double soft_size = 0.0, stiff_size_pinned = 0.0;
+  const Jacobian soft_remainder = remainder(soft, pinned_tip_state(soft), soft_size);
+  const Jacobian stiff_remainder = remainder(stiff, pinned_tip_state(stiff), stiff_size_pinned);
+  const double remainder_size = soft_remainder.cwiseAbs().maxCoeff();
+  const double change = (stiff_remainder - soft_remainder).cwiseAbs().maxCoeff();
+  std::printf("[ measured ] pinned tip: |U V| %.3g (k = 1e2), %.3g (k = 1e6); |J - U V| %.3g, its change %.3g\n",
+              soft_size, stiff_size_pinned, remainder_size, change);
+  EXPECT_GT(stiff_size_pinned, 1e3 * remainder_size);  // the case is stiff: U V dominates J
+  EXPECT_LT(change, 1e-3 * remainder_size + 1e-9 * stiff_size_pinned);
 }
 
 TEST(ViscousDefault, MeetsOneNanoradianAndTenNanoMgOverTenSecondsAtEveryK) {

@@ -75,6 +75,53 @@ class Viscous {
     dydt[kWork] = -e.friction.dot(e.tip_velocity);  // W' = -F . v_P = k |v_P|^2 >= 0
   }
 
+  /// The stiff part of df/dy while sliding, of rank 2: J_stiff = U V with V = dF/dy = -k dv_P/dy
+  /// and U = df/dF (F enters (wX', wY') through Euler's equations and R, vx_G', vy_G' as F/m,
+  /// and W' = k |v_P|^2 as -2 v_P . F's rows). Everything else in J is O(fastest motion), k times
+  /// smaller at stiff friction: RADAU5 solves its Newton systems with this part alone, by
+  /// Woodbury's identity (radau.hpp, "low-rank Newton"). False while skimming (F is then scaled
+  /// by a lambda that depends on y).
+  static constexpr int kStiffRank = 2;
+  using StiffColumns = Eigen::Matrix<double, kStateSize, kStiffRank>;
+  using StiffRows = Eigen::Matrix<double, kStiffRank, kStateSize>;
+  bool stiff_part(const State& y, StiffColumns& u, StiffRows& v) const {
+    if (skimming_) return false;
+    const double w = y[0], x = y[1], yy = y[2], z = y[3];
+    const double wx = y[state_index::kOmegaX], wy = y[state_index::kOmegaY];
+    const double h = parameters_.tip_distance, k = parameters_.friction;
+    // The horizontal parts of e_X and e_Y (evaluate()) and their derivatives in (w, x, y, z).
+    const Vector2 ex(1.0 - 2.0 * (yy * yy + z * z), 2.0 * (x * yy + w * z));
+    const Vector2 ey(2.0 * (x * yy - w * z), 1.0 - 2.0 * (x * x + z * z));
+    const Eigen::Matrix<double, 2, 4> d_ex = (Eigen::Matrix<double, 2, 4>() << 0.0, 0.0, -4.0 * yy, -4.0 * z,  //
+                                              2.0 * z, 2.0 * yy, 2.0 * x, 2.0 * w)
+                                                 .finished();
+    const Eigen::Matrix<double, 2, 4> d_ey = (Eigen::Matrix<double, 2, 4>() << -2.0 * z, 2.0 * yy, 2.0 * x, -2.0 * w,  //
+                                              0.0, -4.0 * x, 0.0, -4.0 * z)
+                                                 .finished();
+    // v_P = v_G - h (wY e_X - wX e_Y) (evaluate()); V = -k dv_P/dy.
+    v.setZero();
+    v.template leftCols<4>() = (k * h) * (wy * d_ex - wx * d_ey);
+    v.col(state_index::kOmegaX) = (-k * h) * ey;
+    v.col(state_index::kOmegaY) = (k * h) * ex;
+    v(0, kVx) = v(1, kVy) = -k;
+    // U: (wX', wY') = b + (h/A) (R n + f), f = (F . e_Y, -F . e_X), R affine in n . f with slope
+    // -alpha / det T (SlidingContact::solve), so d(wX', wY')/dF = (h/A) (I - alpha n n^T / det T) S.
+    const Vector3 gamma = vertical_in_body(y);
+    const Vector2 n(gamma.y(), -gamma.x());
+    const double a = parameters_.inertia_transverse, m = parameters_.mass;
+    const double alpha = m * h * h / a;
+    const Eigen::Matrix2d projection = Eigen::Matrix2d::Identity() - (alpha / (1.0 + alpha * n.squaredNorm())) * n * n.transpose();
+    Eigen::Matrix2d s;
+    s.row(0) = ey.transpose();
+    s.row(1) = -ex.transpose();
+    u.setZero();
+    u.template middleRows<2>(state_index::kOmegaX) = (h / a) * projection * s;
+    u(kVx, 0) = u(kVy, 1) = 1.0 / m;
+    const Vector2 tip_velocity(y[kVx] - h * (wy * ex.x() - wx * ey.x()), y[kVy] - h * (wy * ex.y() - wx * ey.y()));
+    u.row(kWork) = -2.0 * tip_velocity.transpose();
+    return true;
+  }
+
   double normal_force(const State& y) const { return evaluate(y).dynamics.normal_force; }
 
   ModelOutputs outputs(const State& y) const {
