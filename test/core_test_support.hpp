@@ -40,6 +40,13 @@ Model slipping_top(double friction) {
   return Model(top, slipping_start());
 }
 
+/// The viscous top without its stiff part (kStiffRank 0): RADAU5 takes its Jacobians by
+/// differences, as for a model that has none (its simplified and per-stage Newtons).
+struct ViscousByDifferences : Viscous {
+  using Viscous::Viscous;
+  static constexpr int kStiffRank = 0;
+};
+
 /// Prints a measured figure next to the test's output (the numbers doc/physics_tests.md quotes).
 inline void report(const char* what, double value) { std::printf("[ measured ] %s = %.6g\n", what, value); }
 
