@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "spinning_top/integrators/exact_stepper.hpp"
+#include "spinning_top/integrators/radau.hpp"
 #include "spinning_top/scenes/fixed_tip.hpp"
 #include "spinning_top/scenes/frictionless.hpp"
 #include "spinning_top/scenes/viscous.hpp"
@@ -180,6 +181,62 @@ std::string unit_costs(const Model& model, const char* name) {
   return line;
 }
 
+/// RADAU5's low-rank Newton (models with a stiff part): the factors of three stages and the
+/// 3r x 3r LU, one Woodbury solve of the stage system, one filter of the error estimate; in
+/// evaluations of f (radau.hpp, radau_work::low_rank_*).
+template <class Model>
+std::string low_rank_costs(const Model& model, const char* name) {
+  using Radau = RadauIIA5<Model>;
+  typename Model::State y = model.initial_state(), f;
+  const typename Model::State y0 = y;
+  const double eval = per_call(
+      [&](int i) {
+        if ((i & 1023) == 0) y = y0;
+        derive(model, y, f);
+        y += 1e-9 * f;
+      },
+      200000);
+  typename Radau::StiffFactors factors;
+  const double stiff_part = per_call(
+      [&](int i) {
+        y = y0;
+        y[0] += 1e-12 * i;
+        model.stiff_part(y, factors.u, factors.v);
+        sink = factors.v(0, 0);
+      },
+      200000);
+  typename Radau::Stages z = 1e-6 * Radau::Stages::Random();
+  typename Radau::LowRankFactorization lr;
+  const double decomposition = per_call(
+      [&](int i) {
+        z(0, 0) += 1e-12 * i;
+        Radau::low_rank_factors(model, y0, z, 1e-4, lr);
+        sink = lr.s.matrixLU()(0, 0);
+      },
+      50000);
+  typename Radau::Stages r = Radau::Stages::Random();
+  const double solve = per_call(
+      [&](int i) {
+        r(0, 0) += 1e-9 * i;
+        const typename Radau::Stages x = Radau::solve_low_rank(lr, r);
+        sink = x(0, 0);
+      },
+      200000);
+  typename Model::State b = Model::State::Random();
+  const double filter = per_call(
+      [&](int i) {
+        b[0] += 1e-9 * i;
+        const typename Model::State x = Radau::filter_low_rank(lr.stage[0], 3.6e4, b);
+        sink = x[0];
+      },
+      200000);
+  char line[256];
+  std::snprintf(line, sizeof line, "| %s (n = %d, rank %d) | %.4f | %.1f | %.1f | %.1f | %.1f |\n", name,
+                Model::kStateSize, Model::kStiffRank, eval, stiff_part / eval, decomposition / eval, solve / eval,
+                filter / eval);
+  return line;
+}
+
 /// exact's construction (ExactStepper::restart, what a hybrid's landing costs): CPU against the
 /// work it charges (ExactStepper: 300 units and 16 per Fourier term).
 template <class Model>
@@ -241,8 +298,8 @@ int main(int argc, char** argv) {
   add("viscous k = 0.02, auto", toy(SceneType::kViscous, IntegratorType::kAuto), 1e8);
   add("viscous k = 30, dop853 1e-12 (stiff: rejections)", stiff(30.0, IntegratorType::kDop853, 1e-12), 1e8);
   add("viscous k = 30, rodas4 1 ms", stiff(30.0, IntegratorType::kRodas4, 1e-12), 1e8);
-  add("viscous k = 1e4, radau5 1e-14 (simplified Newton)", stiff(1e4, IntegratorType::kRadau5, 1e-14), 1e8);
-  add("viscous k = 1e5, radau5 1e-12 (per-stage Newton)", stiff(1e5, IntegratorType::kRadau5, 1e-12), 1e8);
+  add("viscous k = 1e4, radau5 1e-14 (low-rank Newton)", stiff(1e4, IntegratorType::kRadau5, 1e-14), 1e8);
+  add("viscous k = 1e5, radau5 1e-12 (low-rank Newton)", stiff(1e5, IntegratorType::kRadau5, 1e-12), 1e8);
   {
     SceneConfig fast = stiff(1e7, IntegratorType::kRadau5, 1e-14);
     fast.initial.spin = 2000.0;
@@ -292,6 +349,11 @@ int main(int argc, char** argv) {
   initial.velocity_x = 0.05;
   units += unit_costs(Viscous(top, initial), "viscous");
   units += unit_costs(FixedTip(top, initial), "fixed tip");
+  units +=
+      "\nRADAU5's low-rank Newton (the model's stiff part U V), in evaluations of f:\n\n"
+      "| f of | f [us] | stiff part (U, V) | 3 stages' factors + LU | Woodbury solve | error filter |\n"
+      "|---|---|---|---|---|---|\n";
+  units += low_rank_costs(Viscous(top, initial), "viscous");
   units +=
       "\nexact's construction (at each landing of a hopping run), against the work it charges:\n\n"
       "| state | Fourier terms | CPU [us] | work units | CPU per unit [us] |\n|---|---|---|---|---|\n";
