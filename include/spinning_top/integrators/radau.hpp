@@ -514,10 +514,12 @@ class RadauIIA5 {
   static constexpr double kRoundOffFloor = 1e-14;
   // The low-rank Newton contracts at theta ~ h |J_motion| ~ 0.05 (the per-stage one at ~1e-3)
   // and what it leaves has the same sign step after step (the neglected part of J is smooth), so
-  // it accumulates: stopped at kNewtonTolerance the toy top at k = 5e3 ended 1.4e-10 rad and
-  // 1.1e-11 m g h (energy balance) off after 10 s, against 1.4e-11 and 4e-13 with the per-stage
-  // Newton. It stops at a hundredth of it (about one iteration more).
-  static constexpr double kLowRankNewtonTightening = 1e-2;
+  // it accumulates over the ~1e5 steps per second of a fast spin. Stopped at kNewtonTolerance,
+  // the toy top at k = 5e3 ended 1.4e-10 rad and 1.1e-11 m g h (energy balance) off after 10 s,
+  // against 1.4e-11 and 4e-13 with the per-stage Newton; at a hundredth of it, a 2000 rad/s top
+  // at k = 5e3 was still 1.5e-11 rad off dop853 at 1e-14 after 2 s (per-stage: 1.7e-12), and at
+  // a thousandth 1.7e-12: at 1e-14, 3.3-4 iterations per attempt instead of 3.
+  static constexpr double kLowRankNewtonTightening = 1e-3;
 
   void fresh_jacobian(const Model& model, const State& y0, const State& f0) {
     forward_difference_jacobian(model, y0, f0, jacobian_);
