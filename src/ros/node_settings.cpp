@@ -2,6 +2,7 @@
 
 #include <xmlrpcpp/XmlRpcValue.h>
 
+#include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <cstdio>
@@ -65,10 +66,15 @@ ClockMode read_clock_mode(const ros::NodeHandle& nh, ClockMode value) {
   throw InvalidParameter("publish_clock", "must be auto, true or false");
 }
 
-std::vector<std::string> read_top_names(const ros::NodeHandle& nh) {
+/// A list of names (~tops, ~top_topics): a YAML list, or roscpp's command-line text
+/// (`_tops:=[slow,fast]`); `example` shows the form in the refusal.
+std::vector<std::string> read_name_list(const ros::NodeHandle& nh, const std::string& key, const std::string& example,
+                                        bool* given = nullptr) {
   XmlRpc::XmlRpcValue value;
   std::vector<std::string> names;
-  if (!nh.getParam("tops", value)) return names;
+  const bool found = nh.getParam(key, value);
+  if (given != nullptr) *given = found;
+  if (!found) return names;
   if (value.getType() == XmlRpc::XmlRpcValue::TypeString) {
     // roscpp's command line (`_tops:=[slow,fast]`) gives text, not a list: names between
     // brackets, commas and spaces.
@@ -82,12 +88,17 @@ std::vector<std::string> read_top_names(const ros::NodeHandle& nh) {
       }
     }
   } else {
-    require(value.getType() == XmlRpc::XmlRpcValue::TypeArray, "tops", "must be a list of names, e.g. [slow, fast]");
+    require(value.getType() == XmlRpc::XmlRpcValue::TypeArray, key, "must be a list of names, e.g. " + example);
     for (int i = 0; i < value.size(); ++i) {
-      require(value[i].getType() == XmlRpc::XmlRpcValue::TypeString, "tops", "must be a list of names, e.g. [slow, fast]");
+      require(value[i].getType() == XmlRpc::XmlRpcValue::TypeString, key, "must be a list of names, e.g. " + example);
       names.push_back(static_cast<std::string>(value[i]));
     }
   }
+  return names;
+}
+
+std::vector<std::string> read_top_names(const ros::NodeHandle& nh) {
+  const std::vector<std::string> names = read_name_list(nh, "tops", "[slow, fast]");
   std::set<std::string> seen;
   for (const std::string& name : names) {
     require_top_name("tops", name);
@@ -96,7 +107,33 @@ std::vector<std::string> read_top_names(const ros::NodeHandle& nh) {
   return names;
 }
 
+/// ~top_topics: names of per_top_topic_names(), each once, kept in the order a top advertises
+/// them (so that the master lists them alike whatever order the list gave).
+std::vector<std::string> read_top_topics(const ros::NodeHandle& nh) {
+  bool given = false;
+  const std::vector<std::string> names = read_name_list(nh, "top_topics", "[state, event_stamped]", &given);
+  if (!given) return per_top_topic_names();
+  std::string known;
+  for (const std::string& topic : per_top_topic_names()) known += (known.empty() ? "" : ", ") + topic;
+  std::set<std::string> seen;
+  for (const std::string& name : names) {
+    require(std::find(per_top_topic_names().begin(), per_top_topic_names().end(), name) != per_top_topic_names().end(),
+            "top_topics", "'" + excerpt(name) + "' is not a top's topic (" + known + ")");
+    require(seen.insert(name).second, "top_topics", "'" + name + "' is listed twice");  // valid: short
+  }
+  std::vector<std::string> ordered;
+  for (const std::string& topic : per_top_topic_names())
+    if (seen.count(topic) != 0) ordered.push_back(topic);
+  return ordered;
+}
+
 }  // namespace
+
+const std::vector<std::string>& per_top_topic_names() {
+  static const std::vector<std::string> names = {"contact_point", "normal_force", "twist", "state",
+                                                 "markers", "event", "event_stamped"};
+  return names;
+}
 
 const std::vector<std::string>& node_setting_keys() {
   static const std::vector<std::string> keys = {
@@ -104,7 +141,8 @@ const std::vector<std::string>& node_setting_keys() {
       "start_paused", "wait_for_subscriber", "world_frame", "frame_prefix", "body_frame", "contact_frame",
       "marker_rate", "trace_length",
       "trace_resolution", "force_scale", "energy_drift_warning", "energy_drift_error", "quaternion_norm_error",
-      "constraint_error", "late_tick_warning", "real_time_factor_warning", "tops", "reset_reads_parameters",
+      "constraint_error", "late_tick_warning", "real_time_factor_warning", "tops", "top_topics",
+      "top_reset_services", "reset_reads_parameters",
       "scene_file", "overrides_file"};
   return keys;
 }
@@ -218,6 +256,13 @@ NodeSettings read_node_settings(const ros::NodeHandle& nh) {
   require(s.real_time_factor_warning >= 0.0 && s.real_time_factor_warning <= 1.0, "real_time_factor_warning",
           "must lie in [0, 1] (a fraction of the requested real-time factor)");
   s.tops = read_top_names(nh);
+  s.top_topics = read_top_topics(nh);
+  s.top_reset_services = read_bool(nh, "top_reset_services", s.top_reset_services);
+  const auto has_topic = [&s](const char* topic) {
+    return std::find(s.top_topics.begin(), s.top_topics.end(), topic) != s.top_topics.end();
+  };
+  require(!s.wait_for_subscriber || has_topic("contact_point") || has_topic("state"), "wait_for_subscriber",
+          "waits for a subscriber of ~contact_point or ~state: ~top_topics must list one of them");
   return s;
 }
 

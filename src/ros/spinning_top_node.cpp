@@ -712,7 +712,8 @@ void SpinningTopNode::add_top(std::unique_ptr<TopInstance> top) {
                              format("%.9f", (stamp_origin_ + ros::Duration(clock_.time())).toSec());
           return true;
         };
-    top_reset_services_.push_back(private_nh_.advertiseService(name + "/reset", reset));
+    if (settings_.top_reset_services)
+      top_reset_services_.push_back(private_nh_.advertiseService(name + "/reset", reset));
   }
 }
 

@@ -89,15 +89,26 @@ TopInstance::TopInstance(std::string name, const SceneConfig& config, const Eige
         topic, queue, [listeners, count](const ros::SingleSubscriberPublisher&) { ++((*listeners).*count); },
         [listeners, count](const ros::SingleSubscriberPublisher&) { --((*listeners).*count); });
   };
-  contact_point_publisher_ = counted("contact_point", 1000, &Listeners::contact_point, geometry_msgs::PointStamped());
-  normal_force_publisher_ = counted("normal_force", 1000, &Listeners::normal_force, geometry_msgs::WrenchStamped());
-  twist_publisher_ = counted("twist", 1000, &Listeners::twist, geometry_msgs::TwistStamped());
-  state_publisher_ = counted("state", 1000, &Listeners::state, spinning_top::TopState());
-  marker_publisher_ = counted("markers", 10, &Listeners::markers, visualization_msgs::MarkerArray());
-  // Several events can come within one tick (a landing and the lift-off at the same instant):
-  // a queue, so that a subscriber gets each; latched, a late one gets the last.
-  event_publisher_ = nh_.advertise<std_msgs::String>("event", 100, /*latch=*/true);
-  event_stamped_publisher_ = nh_.advertise<spinning_top::TopEvent>("event_stamped", 100, /*latch=*/true);
+  // Only the topics of ~top_topics, in its (the advertisement) order: an empty ros::Publisher
+  // (false) is one the top does not have; nothing is published on it.
+  for (const std::string& topic : settings_.top_topics) {
+    if (topic == "contact_point")
+      contact_point_publisher_ = counted(topic, 1000, &Listeners::contact_point, geometry_msgs::PointStamped());
+    else if (topic == "normal_force")
+      normal_force_publisher_ = counted(topic, 1000, &Listeners::normal_force, geometry_msgs::WrenchStamped());
+    else if (topic == "twist")
+      twist_publisher_ = counted(topic, 1000, &Listeners::twist, geometry_msgs::TwistStamped());
+    else if (topic == "state")
+      state_publisher_ = counted(topic, 1000, &Listeners::state, spinning_top::TopState());
+    else if (topic == "markers")
+      marker_publisher_ = counted(topic, 10, &Listeners::markers, visualization_msgs::MarkerArray());
+    // Several events can come within one tick (a landing and the lift-off at the same instant):
+    // a queue, so that a subscriber gets each; latched, a late one gets the last.
+    else if (topic == "event")
+      event_publisher_ = nh_.advertise<std_msgs::String>(topic, 100, /*latch=*/true);
+    else if (topic == "event_stamped")
+      event_stamped_publisher_ = nh_.advertise<spinning_top::TopEvent>(topic, 100, /*latch=*/true);
+  }
   nh_.setParam("robot_description", top_urdf(start_config_.top, body_frame_));
 }
 
@@ -106,7 +117,7 @@ std::vector<std::string> TopInstance::advertised_topics() const {
   for (const ros::Publisher* publisher : {&contact_point_publisher_, &normal_force_publisher_, &twist_publisher_,
                                           &state_publisher_, &marker_publisher_, &event_publisher_,
                                           &event_stamped_publisher_})
-    topics.push_back(publisher->getTopic());
+    if (*publisher) topics.push_back(publisher->getTopic());
   return topics;
 }
 
@@ -295,9 +306,12 @@ void TopInstance::handle_event(Event event) {
 }
 
 void TopInstance::publish_event(const char* event, const Snapshot& at, bool terminal) {
-  std_msgs::String text;
-  text.data = event;
-  event_publisher_.publish(text);
+  if (event_publisher_) {
+    std_msgs::String text;
+    text.data = event;
+    event_publisher_.publish(text);
+  }
+  if (!event_stamped_publisher_) return;
   spinning_top::TopEvent stamped;
   stamped.header.stamp = stamp_of_(origin_ + at.time);
   stamped.header.frame_id = settings_.world_frame;

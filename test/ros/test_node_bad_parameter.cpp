@@ -58,6 +58,16 @@ TEST(NodeBadParameter, TiltWithTheAxisBelowTheFloor) { expect_refused("bad_tilt"
 TEST(NodeBadParameter, TopListedTwice) { expect_refused("bad_tops", "_tops:=[a,a]", "tops", "listed twice"); }
 TEST(NodeBadParameter, TopPositionThatIsNotANumber) { expect_refused("bad_place", "_tops:=[a] _a/x:=far", "a/x"); }
 TEST(NodeBadParameter, TopKeyNamesItsTop) { expect_refused("bad_top_key", "_tops:=[a] _a/mass:=-1.0", "a/mass"); }
+// ~top_topics names a top's own topics, each once; ~wait_for_subscriber needs one it waits for.
+TEST(NodeBadParameter, TopTopicThatIsNotATopsTopic) {
+  expect_refused("bad_top_topics", "_top_topics:=[state,clock]", "top_topics", "'clock' is not a top's topic");
+}
+TEST(NodeBadParameter, TopTopicListedTwice) {
+  expect_refused("bad_top_topics_twice", "_top_topics:=[state,state]", "top_topics", "listed twice");
+}
+TEST(NodeBadParameter, WaitingForATopicNoTopHas) {
+  expect_refused("bad_wait", "_top_topics:=[event] _wait_for_subscriber:=true", "wait_for_subscriber");
+}
 TEST(NodeBadParameter, TiltOfTheWrongType) { expect_refused("bad_tilt_type", "_initial/tilt:=true", "initial/tilt"); }
 TEST(NodeBadParameter, UnknownScene) { expect_refused("bad_scene", "_scene:=ice", "scene"); }
 TEST(NodeBadParameter, UnknownIntegrator) { expect_refused("bad_integrator", "_integrator:=no_such_integrator", "integrator"); }

@@ -4,7 +4,8 @@
 //     exit 133, publishing /tf_static on a publisher that the shutdown had invalidated);
 //   - a spawn does the same work whatever the count of tops: the messages and parameters one
 //     spawn publishes and writes, counted, are the same for the 1st and the 200th spawn;
-//   - SIGINT with many tops: exit code 0 (the time it takes is printed, not asserted).
+//   - SIGINT with many tops: exit code 0 (the time it takes is printed, not asserted);
+//   - ~top_topics and ~top_reset_services: each top registers what they list, and no more.
 // Nothing here depends on the machine's load: the SIGINTs are sent at stages of the start the
 // test sees (parameters the node writes), and the wall bounds are hang guards only.
 #include <gtest/gtest.h>
@@ -26,6 +27,7 @@
 
 #include "node_test_helpers.hpp"
 #include "spinning_top/Spawn.h"
+#include "spinning_top/TopState.h"
 
 using node_test::Recorder;
 using node_test::wait_for;
@@ -186,6 +188,71 @@ TEST(ManyTops, ASpawnDoesTheSameWorkWhateverTheCountAndTheNodeLeavesCleanly) {
   std::printf("[ measured ] SIGINT with 81 tops: %s, %.3f s\n", describe(status).c_str(),
               (ros::WallTime::now() - sent).toSec());
   ros::param::del("/" + name);
+}
+
+namespace {
+
+/// Whether the master lists `node` as a publisher of `topic` (kind 0) or as the server of the
+/// service `topic` (kind 2) (getSystemState).
+bool registered_by(const std::string& node, int kind, const std::string& topic) {
+  XmlRpc::XmlRpcValue args, result, payload;
+  args[0] = ros::this_node::getName();
+  if (!ros::master::execute("getSystemState", args, result, payload, true)) return false;
+  for (int i = 0; i < payload[kind].size(); ++i)
+    if (static_cast<std::string>(payload[kind][i][0]) == topic)
+      for (int j = 0; j < payload[kind][i][1].size(); ++j)
+        if (static_cast<std::string>(payload[kind][i][1][j]) == node) return true;
+  return false;
+}
+
+}  // namespace
+
+// ~top_topics and ~top_reset_services choose what each top registers with the master: with
+// hundreds of tops, fewer registrations per top keep a spawn's cost flat and the shutdown short
+// (bench/node_scale.py --per-top). With [state] and no reset services, the tops of ~tops and each
+// spawned top register their ~<name>/state alone (1 topic, no service), the state comes with the
+// top's name, and SIGINT leaves nothing of the node on the master.
+TEST(ManyTops, TopTopicsChooseWhatEachTopRegisters) {
+  const std::string name = "lean";
+  many_tops(name, 3);
+  XmlRpc::XmlRpcValue topics;
+  topics.setSize(1);
+  topics[0] = std::string("state");
+  ros::param::set("/" + name + "/top_topics", topics);
+  ros::param::set("/" + name + "/top_reset_services", false);
+  const std::string node = "/" + name;
+  const pid_t pid = start_node(name);
+  ASSERT_GT(pid, 0);
+  ASSERT_TRUE(ros::service::waitForService(node + "/spawn", ros::Duration(120.0)));
+  EXPECT_TRUE(registered_by(node, 0, node + "/t002/state"));
+  for (const char* absent : {"contact_point", "normal_force", "twist", "markers", "event", "event_stamped"})
+    EXPECT_FALSE(registered_by(node, 0, node + "/t002/" + absent)) << absent << " is not in ~top_topics";
+  EXPECT_FALSE(registered_by(node, 2, node + "/t002/reset")) << "~top_reset_services is false";
+
+  ros::NodeHandle nh;
+  ros::ServiceClient spawn = nh.serviceClient<spinning_top::Spawn>(node + "/spawn", true);
+  for (int i = 0; i < 5; ++i) {
+    const auto before = registrations_of(node);
+    spinning_top::Spawn srv;
+    srv.request.name = "s" + std::to_string(i);
+    srv.request.keys = {"after_lift_off=fly"};
+    srv.request.x = 0.1 * i;
+    ASSERT_TRUE(spawn.call(srv) && srv.response.success) << srv.response.message;
+    const auto after = registrations_of(node);
+    EXPECT_EQ(after.first - before.first, 1) << "topics registered by spawn " << i;
+    EXPECT_EQ(after.second - before.second, 0) << "services registered by spawn " << i;
+  }
+  Recorder<spinning_top::TopState> states(nh, node + "/s4/state", 100);
+  ASSERT_TRUE(wait_for([&] { return states.size() >= 3; }, 30.0)) << "no ~s4/state";
+  EXPECT_EQ(states.messages().back().name, "s4");
+
+  ASSERT_EQ(kill(pid, SIGINT), 0);
+  const int status = wait_exit(pid, 60.0);
+  EXPECT_TRUE(status != -1 && WIFEXITED(status) && WEXITSTATUS(status) == 0) << describe(status);
+  const auto left = registrations_of(node);
+  EXPECT_EQ(left.first, 0) << "topics of the node left on the master";
+  EXPECT_EQ(left.second, 0) << "services of the node left on the master";
+  ros::param::del(node);
 }
 
 int main(int argc, char** argv) { return node_test::run_node_tests(argc, argv, "test_node_many_tops", 2); }

@@ -61,7 +61,19 @@ struct NodeSettings {
   /// Names of the tops to start with, each reading its keys from ~<name>/ over the node's own
   /// (~tops: [slow, fast]); empty: one top from the node's own keys, with the unprefixed names
   std::vector<std::string> tops;
+  /// ~top_topics: the topics every top advertises (under ~ or ~<name>/), in advertisement order;
+  /// default all of per_top_topic_names(). Each is one registration with the master per top, and
+  /// roscpp's and rosmaster's bookkeeping of a node's registrations grows with their count: with
+  /// hundreds of tops, fewer per top keep a spawn's cost flat and the shutdown short.
+  std::vector<std::string> top_topics;
+  /// ~top_reset_services: each named top advertises ~<name>/reset (one more registration per top,
+  /// and one more call to the master at shutdown: roscpp unregisters services one by one)
+  bool top_reset_services = true;
 };
+
+/// The per-top topics in the order a top advertises them: contact_point, normal_force, twist,
+/// state, markers, event, event_stamped (the default of ~top_topics).
+const std::vector<std::string>& per_top_topic_names();
 
 /// The body frame (body true) or the contact frame of the top `top_name` ("" for the node's own
 /// top): [<frame_prefix>/][<top_name>/]top by default; an explicit ~body_frame (~contact_frame)

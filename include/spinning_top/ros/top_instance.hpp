@@ -127,10 +127,13 @@ class TopInstance {
 
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) const;
   Event event() const { return simulator_->event(); }
-  /// Whether ~contact_point and ~state both have a subscriber (for ~wait_for_subscriber).
-  bool subscribed() const { return listeners_->contact_point > 0 && listeners_->state > 0; }
-  /// The top's topics, resolved, in the order they were advertised (the master lists a node's
-  /// registrations in that order; see SpinningTopNode::unregister_at_exit).
+  /// Whether ~contact_point and ~state both have a subscriber, those of them the top has
+  /// (~top_topics; read_node_settings requires one with ~wait_for_subscriber).
+  bool subscribed() const {
+    return (!contact_point_publisher_ || listeners_->contact_point > 0) && (!state_publisher_ || listeners_->state > 0);
+  }
+  /// The top's topics (~top_topics), resolved, in the order they were advertised (the master
+  /// lists a node's registrations in that order; see SpinningTopNode::unregister_at_exit).
   std::vector<std::string> advertised_topics() const;
 
  private:
