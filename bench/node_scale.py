@@ -9,7 +9,11 @@ with the node's own account of its unregistration (its log line).
 test/node_many_tops.test asserts what holds at any load (a spawn does the same work whatever the
 count; exit code 0 at SIGINT); the wall times, which depend on the machine, are measured here.
 
-Usage: node_scale.py RESULTS_DIR [--count 1000] [--paused] [--repeat 1]
+--per-top chooses what each top registers with the master (repeat it to compare, runs
+interleaved): a comma list of its topics (~top_topics) and `reset` (its ~<name>/reset service,
+~top_reset_services); `all` (the default) is the seven topics and the service, `none` nothing.
+
+Usage: node_scale.py RESULTS_DIR [--count 1000] [--paused | --also-paused] [--repeat 1] [--per-top SPEC ...]
        (with build/devel/setup.bash sourced; /usr/bin/python3)
 Writes node_scale.md into RESULTS_DIR.
 """
@@ -34,7 +38,25 @@ def node_executable():
     raise SystemExit("node_scale.py: error: no spinning_top_node found: source build/devel/setup.bash first")
 
 
-def run(count, paused, log_lines):
+ALL_TOPICS = ["contact_point", "normal_force", "twist", "state", "markers", "event", "event_stamped"]
+
+
+def per_top_arguments(spec):
+    """The node's arguments for a --per-top SPEC, and the registrations per top it makes."""
+    if spec == "all":
+        return [], len(ALL_TOPICS) + 1
+    names = [] if spec == "none" else [n.strip() for n in spec.split(",") if n.strip()]
+    unknown = [n for n in names if n not in ALL_TOPICS + ["reset"]]
+    if unknown:
+        raise SystemExit(f"node_scale.py: error: --per-top: unknown {unknown} (topics {ALL_TOPICS}, reset)")
+    topics = [n for n in names if n != "reset"]
+    arguments = [f"_top_topics:=[{','.join(topics)}]"]
+    if "reset" not in names:
+        arguments.append("_top_reset_services:=false")
+    return arguments, len(names)
+
+
+def run(count, paused, log_lines, per_top=()):
     port = free_port()
     env = dict(os.environ, ROS_MASTER_URI=f"http://127.0.0.1:{port}", ROS_HOSTNAME="127.0.0.1")
     env.pop("ROS_IP", None)
@@ -51,7 +73,8 @@ def run(count, paused, log_lines):
             if time.monotonic() > deadline:
                 raise RuntimeError("roscore did not come up")
             time.sleep(0.2)
-        arguments = [node_executable(), "__name:=scale", "_rate:=1000", f"_start_paused:={str(paused).lower()}"]
+        arguments = [node_executable(), "__name:=scale", "_rate:=1000", f"_start_paused:={str(paused).lower()}",
+                     *per_top]
         log = open(log_lines, "w")
         node = subprocess.Popen(arguments, env=env, stdout=log, stderr=subprocess.STDOUT)
         wait_for_service(env, "/scale/spawn")
@@ -82,26 +105,35 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("results", help="directory for node_scale.md")
     parser.add_argument("--count", type=int, default=1000, help="tops to spawn (default 1000)")
-    parser.add_argument("--paused", action="store_true", help="spawn into a paused node")
-    parser.add_argument("--repeat", type=int, default=1, help="runs (default 1)")
+    parser.add_argument("--paused", action="store_true", help="spawn into a paused node only")
+    parser.add_argument("--also-paused", action="store_true", help="each run also into a paused node")
+    parser.add_argument("--repeat", type=int, default=1, help="runs of each --per-top (default 1)")
+    parser.add_argument("--per-top", action="append", metavar="SPEC",
+                        help="what each top registers: all (default), none, or a comma list of its topics "
+                             "and reset (its service); repeat it to compare")
     options = parser.parse_args()
+    specs = options.per_top or ["all"]
+    modes = [True] if options.paused else [False, True] if options.also_paused else [False]
+    configurations = [(paused, spec, *per_top_arguments(spec)) for paused in modes for spec in specs]
     os.makedirs(options.results, exist_ok=True)
     lines = []
     for run_index in range(options.repeat):
-        log = os.path.join(tempfile.gettempdir(), "node_scale_node.log")  # the node's own lines
-        costs, exit_seconds, code = run(options.count, options.paused, log)
-        tenth = max(1, len(costs) // 10)
-        first = statistics.median(costs[:tenth]) * 1e3
-        last = statistics.median(costs[-tenth:]) * 1e3
-        with open(log) as f:
-            account = [line.strip() for line in f if "unregister" in line or "exit" in line.lower() or "master did not" in line]
-        lines.append(f"| {options.count} | {'paused' if options.paused else 'running'} | {first:.1f} | {last:.1f} | "
-                     f"{sum(costs):.1f} | {exit_seconds:.2f} | {code} |")
-        print(lines[-1], *account, sep="\n  ", flush=True)
+        for paused, spec, arguments, registrations in configurations:
+            log = os.path.join(tempfile.gettempdir(), "node_scale_node.log")  # the node's own lines
+            costs, exit_seconds, code = run(options.count, paused, log, arguments)
+            tenth = max(1, len(costs) // 10)
+            first = statistics.median(costs[:tenth]) * 1e3
+            last = statistics.median(costs[-tenth:]) * 1e3
+            with open(log) as f:
+                account = [line.strip() for line in f if "unregister" in line or "exit" in line.lower() or "master did not" in line]
+            lines.append(f"| {options.count} | {'paused' if paused else 'running'} | {spec} ({registrations}) "
+                         f"| {first:.1f} | {last:.1f} | "
+                         f"{sum(costs):.1f} | {exit_seconds:.2f} | {code} |")
+            print(lines[-1], *account, sep="\n  ", flush=True)
     with open(os.path.join(options.results, "node_scale.md"), "w") as f:
         f.write(f"{time.strftime('%Y-%m-%d %H:%M')}, load {os.getloadavg()[0]:.1f}\n\n"
-                "| tops spawned | node | first 10 % of spawns, median [ms] | last 10 % [ms] | all spawns [s] "
-                "| SIGINT to exit [s] | exit code |\n|---|---|---|---|---|---|---|\n")
+                "| tops spawned | node | per top (registrations) | first 10 % of spawns, median [ms] | last 10 % [ms] "
+                "| all spawns [s] | SIGINT to exit [s] | exit code |\n|---|---|---|---|---|---|---|---|\n")
         f.write("\n".join(lines) + "\n")
 
 
