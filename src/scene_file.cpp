@@ -13,6 +13,7 @@
 #include <cstdio>
 #include <cstring>
 #include <regex>
+#include <set>
 #include <sstream>
 #include <vector>
 
@@ -214,6 +215,22 @@ bool numeric_key(const std::string& key) {
   return false;
 }
 
+/// Whether `key` is a scene key (a value: a number or a name).
+bool value_key_named(const std::string& key) {
+  for (const ParameterSpec& spec : parameter_specs())
+    if (key == spec.key) return true;
+  return false;
+}
+
+/// Whether scene keys lie under `prefix` (initial: ...): a map belongs there.
+bool section(const std::string& prefix) {
+  for (const ParameterSpec& spec : parameter_specs()) {
+    const std::string key = spec.key;
+    if (key.size() > prefix.size() && key.compare(0, prefix.size(), prefix) == 0 && key[prefix.size()] == '/') return true;
+  }
+  return false;
+}
+
 /// The tag as written: !!str for tag:yaml.org,2002:str.
 std::string shown_tag(const std::string& tag) {
   const std::string core = "tag:yaml.org,2002:";
@@ -277,6 +294,7 @@ class SceneFileHandler : public YAML::EventHandler {
         fail(mark, "a merge key (<<) is YAML 1.1 only (rosparam merges, YAML 1.2 reads a key '<<'); write the keys out");
       frame.key = value;
       frame.expecting_key = false;
+      frame.has_entries = true;
       return;
     }
     const std::string key = value_key();
@@ -312,6 +330,14 @@ class SceneFileHandler : public YAML::EventHandler {
     if (!frames_.empty()) {
       if (frames_.back().expecting_key) fail(mark, "a key is a map (keys must be plain names)");
       prefix = value_key();
+      // A map where a value belongs: flattened, `restitution: {}` gave no key at all and the
+      // default ran; `restitution: {a: 1}` would be refused as restitution/a, naming no value.
+      if (value_key_named(prefix))
+        throw SceneFileError(prefix + ": a map is not a valid value; write " +
+                             (numeric_key(prefix) ? "a number" : "the value") + where(mark));
+      // A section written twice: flattened, both would merge, while rosparam (PyYAML) keeps the
+      // last map alone: one file, two scenes.
+      if (!maps_seen_.insert(prefix).second) throw SceneFileError(prefix + ": given twice" + where(mark));
     }
     if (static_cast<int>(frames_.size()) >= kMaxDepth)
       fail(mark, "maps nested more than " + std::to_string(kMaxDepth) + " deep; a scene file nests one level (initial:)");
@@ -319,7 +345,12 @@ class SceneFileHandler : public YAML::EventHandler {
   }
 
   void OnMapEnd() override {
+    // An empty map that is no section of scene keys (`foo: {}`) would vanish in the flat map:
+    // refused as any unknown key is, rather than read as nothing.
+    const Frame ended = frames_.back();
     frames_.pop_back();
+    if (!frames_.empty() && !ended.has_entries && !section(ended.prefix))
+      throw SceneFileError(ended.prefix + ": an empty map is not a scene key or section (in " + file_ + ")");
     if (!frames_.empty()) frames_.back().expecting_key = true;
   }
 
@@ -328,6 +359,7 @@ class SceneFileHandler : public YAML::EventHandler {
     std::string prefix;  ///< the flattened key of this map ("" at the top)
     std::string key;     ///< the key whose value comes next
     bool expecting_key;
+    bool has_entries = false;  ///< a key was read in this map
   };
 
   std::string value_key() const {
@@ -365,6 +397,7 @@ class SceneFileHandler : public YAML::EventHandler {
   ParameterMap& out_;
   DocumentStarts& starts_;
   std::vector<Frame> frames_;
+  std::set<std::string> maps_seen_;  ///< the prefixes of the maps read so far
   std::size_t nodes_ = 0;
 };
 

@@ -103,7 +103,7 @@ TEST_F(SceneFileTest, AnchorsAndAliasesAreRefusedBeforeAnythingExpands) {
   // An alias alone (its anchor elsewhere is refused first), and a merge key.
   // Named by the key whose value it is.
   EXPECT_TRUE(contains(refusal(kScene + "gravity: &g 9.8\nfriction: *g\n"), "gravity: an anchor (&g)"));
-  EXPECT_TRUE(contains(refusal(kScene + "initial: {spin_angle: &a !!str 1}\n"), "initial/spin_angle: an anchor (&a)"));
+  EXPECT_TRUE(contains(refusal("scene: fixed_tip\ninitial: {spin_angle: &a !!str 1}\n"), "initial/spin_angle: an anchor (&a)"));
   EXPECT_TRUE(contains(refusal("base: {mass: 0.1}\n<<: {mass: 0.2}\n"), "merge key"));
 }
 
@@ -182,6 +182,28 @@ TEST_F(SceneFileTest, QuotedOrTaggedNumbersAreRefusedNamingTheKey) {
     EXPECT_EQ(keys.at("integrator"), "dop853");
   }
   EXPECT_TRUE(contains(refusal("scene: !!str fixed_tip\n"), "scene: has the tag !!str"));
+}
+
+// A map where a value belongs, an empty map that is no section, a section written twice: each
+// flattened to something other than what rosparam (PyYAML) loads for the node. `restitution: {}`
+// gave no key at all (the default ran, exit 0), `foo: {}` vanished, and `initial:` twice merged
+// here while PyYAML keeps the last map alone (found by the attack with seed 1206).
+TEST_F(SceneFileTest, MapsOnlyWhereSectionsBelongEachOnce) {
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"restitution: {}\n", "restitution: a map is not a valid value; write a number"},
+      {"rim_radius: {a: 1}\n", "rim_radius: a map is not a valid value; write a number"},
+      {"integrator: {}\n", "integrator: a map is not a valid value"},
+      {"foo: {}\n", "foo: an empty map is not a scene key or section"},
+      {"initial: {}\n", "initial: given twice"},
+      {"initial:\n  spin: 50.0\n", "initial: given twice"},
+  };
+  for (const auto& [line, expected] : cases) {
+    const std::string message = refusal(kScene + line);
+    EXPECT_TRUE(contains(message, expected)) << line << " -> " << message;
+  }
+  // A section given once, empty or not, is read as before.
+  EXPECT_EQ(read_scene_file(write("scene: fixed_tip\ninitial: {}\n")).count("scene"), 1u);
+  EXPECT_EQ(read_scene_file(write(kScene)).at("initial/spin"), "150.0");
 }
 
 // Item 8: plain scalars that YAML 1.1 (rosparam, PyYAML: the node) and YAML 1.2 (yaml-cpp:
