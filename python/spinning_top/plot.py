@@ -9,8 +9,9 @@ Debian bookworm has no rqt_plot: this is the package's plotting tool, on matplot
 
 Any numeric field of the message is a series, nested ones with dots (``angular_velocity.z``).
 ``--path`` adds the tip's path on the floor (``contact_point.x`` against ``.y``). The time axis
-is the message stamp (simulated time under use_sim_time). Values that are not finite (nan, inf)
-are not drawn: a warning and the panel's label count them.
+is the message stamp (simulated time under use_sim_time). Values that are not finite (nan, inf),
+or lie beyond +-1e300 (where an axis cannot be scaled), are not drawn: a warning and the panel's
+label count them.
 
 ``--output`` is written exactly as named, in the format of its extension (.png, .svg, .pdf, ...),
 or refused before anything is read. Errors are one line naming the option, exit status 2.
@@ -87,11 +88,15 @@ class Series:
         self.values = {field: [] for field in self.fields}
         self.path_x, self.path_y = [], []
         self.non_finite = {field: (0, 0) for field in self.fields + (PATH_FIELDS if path else [])}
+        #: per field, the count of finite values beyond +-PLOT_RANGE (not drawn either)
+        self.beyond = {field: 0 for field in self.non_finite}
 
     def _count(self, field, value):
         if not math.isfinite(value):
             nan, inf = self.non_finite[field]
             self.non_finite[field] = (nan + 1, inf) if math.isnan(value) else (nan, inf + 1)
+        elif abs(value) > PLOT_RANGE:
+            self.beyond[field] += 1
 
     def add(self, message):
         values = {field: field_value(message, field) for field in self.fields}  # all or nothing
@@ -110,11 +115,17 @@ class Series:
 
     def warnings(self):
         """One line per field with values that are not finite, naming it and counting them."""
-        return [f"{self.topic}: {field}: {nan + inf} of {len(self)} values are not finite ({nan} nan, {inf} inf); "
-                "not drawn" for field, (nan, inf) in self.non_finite.items() if nan + inf]
+        lines = [f"{self.topic}: {field}: {nan + inf} of {len(self)} values are not finite ({nan} nan, {inf} inf); "
+                 "not drawn" for field, (nan, inf) in self.non_finite.items() if nan + inf]
+        return lines + [f"{self.topic}: {field}: {count} of {len(self)} values lie beyond +-{PLOT_RANGE:g}, where a "
+                        "plot's axis cannot be scaled; not drawn" for field, count in self.beyond.items() if count]
 
 
 PATH_FIELDS = ["contact_point.x", "contact_point.y"]
+
+#: The largest magnitude drawn: matplotlib's axis limits, margins and ticks subtract and scale
+#: the data's extremes, and overflowed (then raised IndexError) for a series from -1e308 to 1e308.
+PLOT_RANGE = 1e300
 
 
 #: The first line of every bag rosbag reads (format 2.0).
@@ -183,12 +194,15 @@ def label(field, series=()):
     unit = UNITS.get(field.split(".")[0])
     text = f"{field} [{unit}]" if unit else field
     hidden = sum(sum(s.non_finite.get(field, (0, 0))) for s in series)
-    return text + (f"\n({hidden} not finite, not drawn)" if hidden else "")
+    beyond = sum(s.beyond.get(field, 0) for s in series)
+    return (text + (f"\n({hidden} not finite, not drawn)" if hidden else "") +
+            (f"\n({beyond} beyond +-{PLOT_RANGE:g}, not drawn)" if beyond else ""))
 
 
 def _finite(values):
-    """The values with nan in place of +-inf (drawn as gaps, as nan is)."""
-    return [v if math.isfinite(v) else math.nan for v in values]
+    """The values with nan in place of +-inf and of values beyond +-PLOT_RANGE (drawn as gaps, as
+    nan is)."""
+    return [v if math.isfinite(v) and abs(v) <= PLOT_RANGE else math.nan for v in values]
 
 
 def draw(series, figure=None):

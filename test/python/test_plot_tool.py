@@ -123,6 +123,28 @@ def test_the_figure_marks_non_finite_values(bag):
     assert sum(not math.isfinite(y) for y in line.get_ydata()) == 2
 
 
+def test_values_beyond_what_an_axis_scales_are_named_counted_and_not_drawn(plot_main, tmp_path):
+    """A tilt of -1e308 and 1e308 took matplotlib's axis into an overflow and an IndexError (a
+    traceback, exit 1; the attack's seed 1206). +-1e300 is still drawn."""
+    path = tmp_path / "huge.bag"
+    with rosbag.Bag(str(path), "w") as b:
+        for i, tilt in enumerate([0.1, 1e308, -1e308, 0.2, 1e300, -1e300, 5e-324]):
+            m = TopState()
+            m.header.stamp = rospy.Time(0, (i + 1) * 10_000_000)
+            m.tilt = tilt
+            b.write(TOPIC, m, m.header.stamp)
+    status, out, err = plot_main("--fields", "tilt", "--output", "huge.png", bag_path=str(path))
+    assert status == 0
+    assert err == [f"plot: warning: {TOPIC}: tilt: 2 of 7 values lie beyond +-1e+300, where a plot's axis cannot "
+                   "be scaled; not drawn"]
+    assert out[-1] == "plot: wrote huge.png" and os.path.getsize("huge.png") > 0
+    (series,) = plot.read_bag(str(path), [TOPIC], ["tilt"], False)
+    (axis,) = plot.draw([series]).axes
+    assert "2 beyond +-1e+300, not drawn" in axis.get_ylabel()
+    (line,) = axis.get_lines()
+    assert sum(math.isnan(y) for y in line.get_ydata()) == 2
+
+
 def test_bad_topics_and_bags_are_refused(plot_main, tmp_path, bag):
     status, _, err = plot_main("--topic", TOPIC, "--topic", TOPIC)
     assert (status, err) == (2, [f"plot: error: --topic {TOPIC}: given twice"])
