@@ -208,18 +208,17 @@ std::string yaml_number_problem(const std::string& text) {
   return "";
 }
 
-/// Whether `key` is a configuration key whose value is a number (not a name such as scene).
-bool numeric_key(const std::string& key) {
+/// The scene key `key` (a value: a number or a name), nullptr if there is none.
+const ParameterSpec* spec_of(const std::string& key) {
   for (const ParameterSpec& spec : parameter_specs())
-    if (key == spec.key) return !spec.text;
-  return false;
+    if (key == spec.key) return &spec;
+  return nullptr;
 }
 
-/// Whether `key` is a scene key (a value: a number or a name).
-bool value_key_named(const std::string& key) {
-  for (const ParameterSpec& spec : parameter_specs())
-    if (key == spec.key) return true;
-  return false;
+/// Whether `key` is a configuration key whose value is a number (not a name such as scene).
+bool numeric_key(const std::string& key) {
+  const ParameterSpec* spec = spec_of(key);
+  return spec != nullptr && !spec->text;
 }
 
 /// Whether scene keys lie under `prefix` (initial: ...): a map belongs there.
@@ -332,9 +331,9 @@ class SceneFileHandler : public YAML::EventHandler {
       prefix = value_key();
       // A map where a value belongs: flattened, `restitution: {}` gave no key at all and the
       // default ran; `restitution: {a: 1}` would be refused as restitution/a, naming no value.
-      if (value_key_named(prefix))
+      if (const ParameterSpec* spec = spec_of(prefix))
         throw SceneFileError(prefix + ": a map is not a valid value; write " +
-                             (numeric_key(prefix) ? "a number" : "the value") + where(mark));
+                             (spec->text ? "the value" : "a number") + where(mark));
       // A section written twice: flattened, both would merge, while rosparam (PyYAML) keeps the
       // last map alone: one file, two scenes.
       if (!maps_seen_.insert(prefix).second) throw SceneFileError(prefix + ": given twice" + where(mark));

@@ -112,17 +112,18 @@ std::vector<std::string> read_top_names(const ros::NodeHandle& nh) {
 std::vector<std::string> read_top_topics(const ros::NodeHandle& nh) {
   bool given = false;
   const std::vector<std::string> names = read_name_list(nh, "top_topics", "[state, event_stamped]", &given);
-  if (!given) return per_top_topic_names();
+  const std::vector<std::string>& all = per_top_topic_names();
+  if (!given) return all;
   std::string known;
-  for (const std::string& topic : per_top_topic_names()) known += (known.empty() ? "" : ", ") + topic;
+  for (const std::string& topic : all) known += (known.empty() ? "" : ", ") + topic;
   std::set<std::string> seen;
   for (const std::string& name : names) {
-    require(std::find(per_top_topic_names().begin(), per_top_topic_names().end(), name) != per_top_topic_names().end(),
-            "top_topics", "'" + excerpt(name) + "' is not a top's topic (" + known + ")");
+    require(std::find(all.begin(), all.end(), name) != all.end(), "top_topics",
+            "'" + excerpt(name) + "' is not a top's topic (" + known + ")");
     require(seen.insert(name).second, "top_topics", "'" + name + "' is listed twice");  // valid: short
   }
   std::vector<std::string> ordered;
-  for (const std::string& topic : per_top_topic_names())
+  for (const std::string& topic : all)
     if (seen.count(topic) != 0) ordered.push_back(topic);
   return ordered;
 }

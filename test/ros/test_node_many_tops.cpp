@@ -20,6 +20,7 @@
 #include <ros/master.h>
 #include <ros/this_node.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <string>
 #include <utility>
@@ -117,19 +118,6 @@ TEST(ManyTops, SigintDuringTheStartEndsTheNodeCleanly) {
 
 namespace {
 
-/// The topics and services the master lists for `node` (getSystemState).
-std::pair<int, int> registrations_of(const std::string& node) {
-  XmlRpc::XmlRpcValue args, result, payload;
-  args[0] = ros::this_node::getName();
-  if (!ros::master::execute("getSystemState", args, result, payload, true)) return {-1, -1};
-  int topics = 0, services = 0;
-  for (int kind : {0, 2})  // publishers, services
-    for (int i = 0; i < payload[kind].size(); ++i)
-      for (int j = 0; j < payload[kind][i][1].size(); ++j)
-        if (static_cast<std::string>(payload[kind][i][1][j]) == node) ++(kind == 0 ? topics : services);
-  return {topics, services};
-}
-
 /// The topics and services of `node` whose names start with `prefix` (getSystemState).
 std::pair<int, int> registrations_under(const std::string& node, const std::string& prefix) {
   XmlRpc::XmlRpcValue args, result, payload;
@@ -142,6 +130,15 @@ std::pair<int, int> registrations_under(const std::string& node, const std::stri
         for (int j = 0; j < payload[kind][i][1].size(); ++j)
           if (static_cast<std::string>(payload[kind][i][1][j]) == node) ++(kind == 0 ? topics : services);
   return {topics, services};
+}
+
+/// All the topics and services the master lists for `node`.
+std::pair<int, int> registrations_of(const std::string& node) { return registrations_under(node, ""); }
+
+/// Whether the master lists `node` among the publishers of `topic`.
+bool publishes(const std::string& node, const std::string& topic) {
+  const std::vector<std::string> publishers = node_test::publishers_of(topic);
+  return std::find(publishers.begin(), publishers.end(), node) != publishers.end();
 }
 
 }  // namespace
@@ -203,23 +200,6 @@ TEST(ManyTops, ASpawnDoesTheSameWorkWhateverTheCountAndTheNodeLeavesCleanly) {
   ros::param::del("/" + name);
 }
 
-namespace {
-
-/// Whether the master lists `node` as a publisher of `topic` (kind 0) or as the server of the
-/// service `topic` (kind 2) (getSystemState).
-bool registered_by(const std::string& node, int kind, const std::string& topic) {
-  XmlRpc::XmlRpcValue args, result, payload;
-  args[0] = ros::this_node::getName();
-  if (!ros::master::execute("getSystemState", args, result, payload, true)) return false;
-  for (int i = 0; i < payload[kind].size(); ++i)
-    if (static_cast<std::string>(payload[kind][i][0]) == topic)
-      for (int j = 0; j < payload[kind][i][1].size(); ++j)
-        if (static_cast<std::string>(payload[kind][i][1][j]) == node) return true;
-  return false;
-}
-
-}  // namespace
-
 // ~top_topics and ~top_reset_services choose what each top registers with the master: with
 // hundreds of tops, fewer registrations per top keep a spawn's cost flat and the shutdown short
 // (bench/node_scale.py --per-top). With [state] and no reset services, the tops of ~tops and each
@@ -237,10 +217,10 @@ TEST(ManyTops, TopTopicsChooseWhatEachTopRegisters) {
   const pid_t pid = start_node(name);
   ASSERT_GT(pid, 0);
   ASSERT_TRUE(ros::service::waitForService(node + "/spawn", ros::Duration(120.0)));
-  EXPECT_TRUE(registered_by(node, 0, node + "/t002/state"));
+  EXPECT_TRUE(publishes(node, node + "/t002/state"));
   for (const char* absent : {"contact_point", "normal_force", "twist", "markers", "event", "event_stamped"})
-    EXPECT_FALSE(registered_by(node, 0, node + "/t002/" + absent)) << absent << " is not in ~top_topics";
-  EXPECT_FALSE(registered_by(node, 2, node + "/t002/reset")) << "~top_reset_services is false";
+    EXPECT_FALSE(publishes(node, node + "/t002/" + absent)) << absent << " is not in ~top_topics";
+  EXPECT_EQ(registrations_under(node, node + "/t002/reset").second, 0) << "~top_reset_services is false";
 
   ros::NodeHandle nh;
   ros::ServiceClient spawn = nh.serviceClient<spinning_top::Spawn>(node + "/spawn", true);
