@@ -144,8 +144,10 @@ bool publishes(const std::string& node, const std::string& topic) {
 }  // namespace
 
 // What one spawn does, counted: /tf_static is republished only when the set of pivots changes
-// (each spawn sent every pivot again: with 50 pivots, 50 transforms per spawn of any top), and a
-// spawn registers the same 7 topics and 1 service for the 1st top as for the 30th. Then SIGINT:
+// (each spawn sent every pivot again: with 50 pivots, 50 transforms per spawn of any top), a
+// spawn registers the same 7 topics and 1 service for the 1st top as for the 30th, and it sends
+// nothing to /rosout (roscpp puts the names of all the node's topics in each record: with 1,000
+// tops, 7,000 names, ~175 kB a spawn, and rosout.log grew by the square of the count). Then SIGINT:
 // exit code 0, and the master keeps nothing of the node (its topics unregistered in one call).
 TEST(ManyTops, ASpawnDoesTheSameWorkWhateverTheCountAndTheNodeLeavesCleanly) {
   const std::string name = "spawner";
@@ -153,15 +155,24 @@ TEST(ManyTops, ASpawnDoesTheSameWorkWhateverTheCountAndTheNodeLeavesCleanly) {
   ros::param::set("/" + name + "/start_paused", true);
   ros::NodeHandle nh;
   Recorder<tf2_msgs::TFMessage> tf_static(nh, "/tf_static", 1000);
+  Recorder<rosgraph_msgs::Log> log(nh, "/rosout", 10000);
+  const auto records_of_node = [&] {
+    const auto records = log.messages();
+    return std::count_if(records.begin(), records.end(), [&](const auto& m) { return m.name == "/" + name; });
+  };
   const pid_t pid = start_node(name);
   ASSERT_GT(pid, 0);
   ASSERT_TRUE(ros::service::waitForService("/" + name + "/spawn", ros::Duration(120.0)));
+  // Its start-up line ("50 tops, ...") shows that its /rosout reaches us.
+  ASSERT_TRUE(wait_for([&] { return records_of_node() >= 1; }, 30.0)) << "no /rosout record of the node";
   ASSERT_TRUE(wait_for([&] { return tf_static.size() >= 1; }, 30.0)) << "no /tf_static";
   ros::WallDuration(0.5).sleep();
   ASSERT_EQ(tf_static.size(), 1u) << "the start published its pivots more than once";
   EXPECT_EQ(tf_static.messages().back().transforms.size(), 50u);
 
   ros::ServiceClient spawn = nh.serviceClient<spinning_top::Spawn>("/" + name + "/spawn", true);
+  ros::WallDuration(0.5).sleep();  // the start-up's last lines
+  const auto records_before_spawns = records_of_node();
   std::vector<std::pair<int, int>> added;  // registrations each spawn added
   for (int i = 0; i < 30; ++i) {
     spinning_top::Spawn srv;
@@ -172,6 +183,9 @@ TEST(ManyTops, ASpawnDoesTheSameWorkWhateverTheCountAndTheNodeLeavesCleanly) {
     // Under the top's own namespace: the node's own registrations cannot race the count.
     added.push_back(registrations_under("/" + name, "/" + name + "/" + srv.request.name + "/"));
   }
+  ros::WallDuration(0.5).sleep();
+  const auto spawn_records = records_of_node() - records_before_spawns;
+  EXPECT_EQ(spawn_records, 0) << "/rosout records during 30 spawns; the last: " << log.messages().back().msg;
   for (std::size_t i = 0; i < added.size(); ++i) {
     EXPECT_EQ(added[i].first, 7) << "topics registered by spawn " << i;
     EXPECT_EQ(added[i].second, 1) << "services registered by spawn " << i;
