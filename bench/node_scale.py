@@ -13,7 +13,12 @@ count; exit code 0 at SIGINT); the wall times, which depend on the machine, are 
 interleaved): a comma list of its topics (~top_topics) and `reset` (its ~<name>/reset service,
 ~top_reset_services); `all` (the default) is the seven topics and the service, `none` nothing.
 
-Usage: node_scale.py RESULTS_DIR [--count 1000] [--paused | --also-paused] [--repeat 1] [--per-top SPEC ...]
+--bare runs bench/bare_spawner beside each configuration, the same way: a roscpp node whose
+~spawn makes only the spawn's calls to the master (the top's topics, its reset service, its URDF
+parameter) and simulates nothing. Its growth with the count is roscpp's and rosmaster's own;
+what the node's spawn adds to it is the node's.
+
+Usage: node_scale.py RESULTS_DIR [--count 1000] [--paused | --also-paused] [--repeat 1] [--per-top SPEC ...] [--bare]
        (with build/devel/setup.bash sourced; /usr/bin/python3)
 Writes node_scale.md into RESULTS_DIR.
 """
@@ -30,12 +35,13 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from node_load import free_port, wait_for_service  # noqa: E402
 
 
-def node_executable():
+def executable(name="spinning_top_node"):
     for directory in os.environ.get("CMAKE_PREFIX_PATH", "").split(":"):
-        candidate = os.path.join(directory, "lib", "spinning_top", "spinning_top_node")
+        candidate = os.path.join(directory, "lib", "spinning_top", name)
         if os.path.exists(candidate):
             return candidate
-    raise SystemExit("node_scale.py: error: no spinning_top_node found: source build/devel/setup.bash first")
+    hint = " (cmake --build build --target bare_spawner)" if name == "bare_spawner" else ""
+    raise SystemExit(f"node_scale.py: error: no {name} found{hint}: source build/devel/setup.bash first")
 
 
 ALL_TOPICS = ["contact_point", "normal_force", "twist", "state", "markers", "event", "event_stamped"]
@@ -56,7 +62,7 @@ def per_top_arguments(spec):
     return arguments, len(names)
 
 
-def run(count, paused, log_lines, per_top=()):
+def run(count, paused, log_lines, per_top=(), program="spinning_top_node"):
     port = free_port()
     env = dict(os.environ, ROS_MASTER_URI=f"http://127.0.0.1:{port}", ROS_HOSTNAME="127.0.0.1")
     env.pop("ROS_IP", None)
@@ -73,7 +79,7 @@ def run(count, paused, log_lines, per_top=()):
             if time.monotonic() > deadline:
                 raise RuntimeError("roscore did not come up")
             time.sleep(0.2)
-        arguments = [node_executable(), "__name:=scale", "_rate:=1000", f"_start_paused:={str(paused).lower()}",
+        arguments = [executable(program), "__name:=scale", "_rate:=1000", f"_start_paused:={str(paused).lower()}",
                      *per_top]
         log = open(log_lines, "w")
         node = subprocess.Popen(arguments, env=env, stdout=log, stderr=subprocess.STDOUT)
@@ -108,25 +114,34 @@ def main():
     parser.add_argument("--paused", action="store_true", help="spawn into a paused node only")
     parser.add_argument("--also-paused", action="store_true", help="each run also into a paused node")
     parser.add_argument("--repeat", type=int, default=1, help="runs of each --per-top (default 1)")
+    parser.add_argument("--bare", action="store_true",
+                        help="also run bench/bare_spawner (the spawn's master calls only) in each configuration")
     parser.add_argument("--per-top", action="append", metavar="SPEC",
                         help="what each top registers: all (default), none, or a comma list of its topics "
                              "and reset (its service); repeat it to compare")
     options = parser.parse_args()
     specs = options.per_top or ["all"]
     modes = [True] if options.paused else [False, True] if options.also_paused else [False]
-    configurations = [(paused, spec, *per_top_arguments(spec)) for paused in modes for spec in specs]
+    programs = ["spinning_top_node", "bare_spawner"] if options.bare else ["spinning_top_node"]
+    for program in programs:
+        executable(program)  # before any run
+    # The bare spawner has no pause: once per SPEC, after the node's first mode.
+    configurations = [(program, paused, spec, *per_top_arguments(spec))
+                      for paused in modes for spec in specs for program in programs
+                      if program == "spinning_top_node" or paused == modes[0]]
     os.makedirs(options.results, exist_ok=True)
     lines = []
     for run_index in range(options.repeat):
-        for paused, spec, arguments, registrations in configurations:
+        for program, paused, spec, arguments, registrations in configurations:
             log = os.path.join(tempfile.gettempdir(), "node_scale_node.log")  # the node's own lines
-            costs, exit_seconds, code = run(options.count, paused, log, arguments)
+            costs, exit_seconds, code = run(options.count, paused, log, arguments, program)
             tenth = max(1, len(costs) // 10)
             first = statistics.median(costs[:tenth]) * 1e3
             last = statistics.median(costs[-tenth:]) * 1e3
             with open(log) as f:
                 account = [line.strip() for line in f if "unregister" in line or "exit" in line.lower() or "master did not" in line]
-            lines.append(f"| {options.count} | {'paused' if paused else 'running'} | {spec} ({registrations}) "
+            node = ("paused" if paused else "running") if program == "spinning_top_node" else "bare_spawner"
+            lines.append(f"| {options.count} | {node} | {spec} ({registrations}) "
                          f"| {first:.1f} | {last:.1f} | "
                          f"{sum(costs):.1f} | {exit_seconds:.2f} | {code} |")
             print(lines[-1], *account, sep="\n  ", flush=True)

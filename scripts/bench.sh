@@ -76,11 +76,11 @@ cmake --build "$SPINNING_TOP_BUILD" --target spinning_top_node -- -j"$(nproc)"
 )
 
 echo "bench.sh: the node's CPU as launched against a bare roscpp node beside it (issue 20); spawn and exit with 1000 tops (issue 19)"
-cmake --build "$SPINNING_TOP_BUILD" --target bare_tf_node -- -j"$(nproc)"
+cmake --build "$SPINNING_TOP_BUILD" --target bare_tf_node --target bare_spawner -- -j"$(nproc)"
 (
   spinning_top_source_devel
   /usr/bin/python3 "$SPINNING_TOP_ROOT/bench/node_cpu.py" "$results" $([ ${#quick[@]} -gt 0 ] && echo "--window 3 --repeat 1")
-  /usr/bin/python3 "$SPINNING_TOP_ROOT/bench/node_scale.py" "$results" --per-top all --per-top state,event_stamped --also-paused --repeat 2 $([ ${#quick[@]} -gt 0 ] && echo "--count 200")
+  /usr/bin/python3 "$SPINNING_TOP_ROOT/bench/node_scale.py" "$results" --per-top all --per-top state,event_stamped --also-paused --bare --repeat 2 $([ ${#quick[@]} -gt 0 ] && echo "--count 200")
 )
 
 echo "bench.sh: wall-clock lag and pacing diagnostics, quiet and beside two busy loops (issue 19)"
