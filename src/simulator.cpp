@@ -119,8 +119,9 @@ double largest_fixed_step(const SceneConfig& config, IntegratorType type) {
 
 namespace {
 // auto in the viscous scene: radau5 when lambda = k (1/m + h^2/A) exceeds this many times the
-// fastest motion's rate, else dop853; each at its fraction of the `tolerance` key.
-constexpr double kStiffFrictionRatio = 100.0;
+// fastest motion's rate, else dop853; each at its fraction of the `tolerance` key. The cost
+// crossover with radau5's low-rank Newton, measured at 25-35 (doc/integrators.md); 100 before it.
+constexpr double kStiffFrictionRatio = 30.0;
 constexpr double kRadauToleranceFactor = 0.01;
 constexpr double kDop853ToleranceFactor = 0.1;
 /// A fixed step auto chooses is at most this share of the largest the method can take, so that

@@ -323,21 +323,21 @@ TEST(AutoRule, ViscousRadauWhereFrictionIsStiffAgainstTheMotionElseDop853) {
   config.initial = nutating_top();
   // lambda = k (1/m + h^2/A) = 20 k 1/(kg s); the fastest motion here is the sliding top's
   // nutation, C omega_Z / A = 6e-5 * 150 / 4e-5 = 225 rad/s. auto's threshold is lambda =
-  // 100 * 225 = 22500 1/s, i.e. k = 1125 N s/m.
+  // 30 * 225 = 6750 1/s, i.e. k = 337.5 N s/m.
   const MotionRates rates = motion_rates(config);
   EXPECT_DOUBLE_EQ(rates.fastest_oscillation(), 225.0);
   config.top.friction = 0.01;
   auto simulator = make_simulator(config);
   EXPECT_EQ(simulator->integrator_description(),
-            "auto: dop853, tolerance 1e-13 (not stiff: friction rate k (1/m + h^2/A) 0.2 1/s <= 100 x fastest "
+            "auto: dop853, tolerance 1e-13 (not stiff: friction rate k (1/m + h^2/A) 0.2 1/s <= 30 x fastest "
             "motion 225 rad/s)");
   EXPECT_EQ(simulator->integrator_choice().method, IntegratorType::kDop853);
-  config.top.friction = 1120.0;
+  config.top.friction = 335.0;
   EXPECT_EQ(auto_plan(config).first.type, IntegratorType::kDop853);
-  config.top.friction = 1130.0;
+  config.top.friction = 340.0;
   EXPECT_EQ(auto_plan(config).first.type, IntegratorType::kRadau5);
   EXPECT_EQ(make_simulator(config)->integrator_description(),
-            "auto: radau5, tolerance 1e-14 (stiff: friction rate k (1/m + h^2/A) 2.26e+04 1/s > 100 x fastest motion "
+            "auto: radau5, tolerance 1e-14 (stiff: friction rate k (1/m + h^2/A) 6.8e+03 1/s > 30 x fastest motion "
             "225 rad/s)");
   // A tolerance asked for explicitly scales both: radau5 stays 100x tighter, dop853 10x, floored
   // at 1e-14.
@@ -360,7 +360,7 @@ TEST(AutoRule, AChangeOfFrictionAtUpdateSwitchesBetweenStiffAndNonStiffAndSaysSo
   ASSERT_EQ(simulator->advance_to(0.5), Event::kNone);
   const Snapshot before = simulator->snapshot();
   TopParameters stiff = config.top;
-  stiff.friction = 1e5;  // lambda = 2e6 1/s > 100 x 225 rad/s
+  stiff.friction = 1e5;  // lambda = 2e6 1/s > 30 x 225 rad/s
   EXPECT_TRUE(simulator->update(stiff, config.integrator));
   EXPECT_EQ(simulator->integrator_choice().method, IntegratorType::kRadau5);
   // The switch keeps time and state: the new driver starts from the old one's state (the
@@ -461,7 +461,7 @@ TEST(RefusedSteps, AutoIsNeverRefusedAStepItsViscousMethodsAreAdaptive) {
   SceneConfig config;
   config.scene = SceneType::kViscous;
   config.initial = nutating_top();
-  config.top.friction = 1e4;      // lambda = 2e5 1/s > 100 x 225 rad/s: stiff, auto runs radau5
+  config.top.friction = 1e4;      // lambda = 2e5 1/s > 30 x 225 rad/s: stiff, auto runs radau5
   config.integrator.step = 0.05;  // beyond every fixed-step method's limit 2/225 rad/s
   auto simulator = make_simulator(config);
   EXPECT_EQ(simulator->integrator_description().rfind("auto: radau5, tolerance 1e-14 (stiff: ", 0), 0u)
