@@ -1270,7 +1270,7 @@ bool SpinningTopNode::on_spawn(Spawn::Request& request, Spawn::Response& respons
                      top.simulator().integrator_description() + "; frames " + top.body_frame() + ", " +
                      top.contact_frame();
   // DEBUG, not INFO: the caller has the message in the response, and roscpp puts the names of all
-  // the node's topics in each /rosout record (7,000 names, ~175 kB, at the 1,000th top).
+  // the node's topics in each /rosout record (7,000 names, ~165 kB, at the 1,000th top).
   ROS_DEBUG("spinning_top: spawned %s", response.message.c_str());
   return true;
 }

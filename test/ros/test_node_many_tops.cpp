@@ -147,7 +147,7 @@ bool publishes(const std::string& node, const std::string& topic) {
 // (each spawn sent every pivot again: with 50 pivots, 50 transforms per spawn of any top), a
 // spawn registers the same 7 topics and 1 service for the 1st top as for the 30th, and it sends
 // nothing to /rosout (roscpp puts the names of all the node's topics in each record: with 1,000
-// tops, 7,000 names, ~175 kB a spawn, and rosout.log grew by the square of the count). Then SIGINT:
+// tops, 7,000 names, ~165 kB a spawn, and rosout.log grew by the square of the count). Then SIGINT:
 // exit code 0, and the master keeps nothing of the node (its topics unregistered in one call).
 TEST(ManyTops, ASpawnDoesTheSameWorkWhateverTheCountAndTheNodeLeavesCleanly) {
   const std::string name = "spawner";
