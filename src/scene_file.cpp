@@ -8,6 +8,7 @@
 #include <yaml-cpp/mark.h>
 #include <yaml-cpp/parser.h>
 
+#include <algorithm>
 #include <cctype>
 #include <cerrno>
 #include <cstdio>
@@ -81,9 +82,61 @@ void require_regular(const std::string& path, const struct stat& st) {
                          ", not a regular file; give a scene file (e.g. config/fixed_tip.yaml)");
 }
 
-std::string too_large(const std::string& path) {
-  return "'" + shown_path(path) + "' is larger than " + std::to_string(kMaxFileBytes >> 20) +
-         " MiB; a scene file is a few KB of key: value lines";
+/// Where the first kMaxFileBytes + 1 bytes of a file (head) pass the limit, so that the refusal
+/// points at what grew: " (the limit falls on line 31, in integrator)" for a 30 MB value, "in
+/// k0/.../k1023, nested 1024 levels deep" for deep maps, "in a comment"; "" if head ends first.
+/// The keys come from the indentation of block maps alone (a file refused is not parsed): enough
+/// to point at the culprit, not a reading of the file.
+std::string where_the_limit_falls(const std::string& head) {
+  if (head.size() <= kMaxFileBytes) return "";
+  constexpr std::size_t kKeyCharacters = 80;  // kept of each key (brief() shows 40)
+  struct Level {
+    std::size_t indent;
+    std::string key;
+  };
+  std::vector<Level> path;
+  std::size_t line_start = 0, line_number = 1;
+  for (;;) {
+    std::size_t line_end = head.find('\n', line_start);
+    if (line_end == std::string::npos) line_end = head.size();
+    const std::size_t text = std::min(head.find_first_not_of(' ', line_start), line_end);
+    const std::size_t indent = text - line_start;
+    const bool comment = text < line_end && head[text] == '#';
+    bool has_key = false;
+    if (text < line_end && !comment && head[text] != '-') {
+      // A block map's "key:" or "key: value" (searched within the line only: linear in the head).
+      const std::size_t colon = static_cast<std::size_t>(
+          std::find(head.begin() + static_cast<std::ptrdiff_t>(text), head.begin() + static_cast<std::ptrdiff_t>(line_end), ':') -
+          head.begin());
+      has_key = colon < line_end && (colon + 1 == line_end || head[colon + 1] == ' ' || head[colon + 1] == '\r');
+      if (has_key) {
+        while (!path.empty() && path.back().indent >= indent) path.pop_back();
+        path.push_back({indent, head.substr(text, std::min(colon - text, kKeyCharacters))});
+      }
+    }
+    if (line_end >= kMaxFileBytes) {
+      const std::string where = " (the limit falls on line " + std::to_string(line_number) + ", ";
+      if (comment) return where + "in a comment)";
+      if (!has_key && text < line_end)  // a line without "key:" in its first MiB (a 1 MB key)
+        return where + "in the text '" + brief(head.substr(text, kKeyCharacters), 20) + "')";
+      if (path.empty()) return where + "before any key)";
+      std::string keys;
+      if (path.size() <= 3) {
+        for (const Level& level : path) keys += (keys.empty() ? "" : "/") + brief(level.key);
+      } else {
+        keys = brief(path.front().key) + "/.../" + brief(path.back().key) + ", nested " +
+               std::to_string(path.size()) + " levels deep";
+      }
+      return where + "in " + keys + ")";
+    }
+    line_start = line_end + 1;
+    ++line_number;
+  }
+}
+
+std::string too_large(const std::string& path, const std::string& head) {
+  return "'" + shown_path(path) + "' is larger than " + std::to_string(kMaxFileBytes >> 20) + " MiB" +
+         where_the_limit_falls(head) + "; a scene file is a few KB of key: value lines";
 }
 
 /// The file's text: a regular file (also through a symbolic link) of at most kMaxFileBytes.
@@ -99,8 +152,8 @@ std::string read_bounded(const std::string& path) {
   if (fstat(fd.get(), &st) != 0)
     throw SceneFileError("cannot read '" + shown_path(path) + "': " + std::strerror(errno));
   require_regular(path, st);
-  if (st.st_size > static_cast<off_t>(kMaxFileBytes)) throw SceneFileError(too_large(path));
-  // At most one byte more than the limit: a file that grows, or a /proc file whose size reads 0.
+  // At most one byte more than the limit (also from a larger file: the refusal says where in it
+  // the limit falls), and a file that grows, or a /proc file whose size reads 0, stops there too.
   std::string text(kMaxFileBytes + 1, '\0');
   std::size_t length = 0;
   while (length < text.size()) {
@@ -110,7 +163,7 @@ std::string read_bounded(const std::string& path) {
     if (n == 0) break;
     length += static_cast<std::size_t>(n);
   }
-  if (length > kMaxFileBytes) throw SceneFileError(too_large(path));
+  if (length > kMaxFileBytes) throw SceneFileError(too_large(path, text));
   text.resize(length);
   return text;
 }

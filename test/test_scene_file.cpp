@@ -141,6 +141,19 @@ TEST_F(SceneFileTest, DevicesFifosAndLargeFilesAreRefusedNamingTheFile) {
     EXPECT_TRUE(contains(e.what(), "large.yaml' is larger than 1 MiB")) << e.what();
   }
   EXPECT_NO_THROW(read_scene_file(write(kScene + std::string((1 << 20) - kScene.size(), '#'), "limit.yaml")));
+  // The refusal says where the limit falls (the attack's 30 MB value, 3000 nested maps and 1 MB
+  // key were refused naming the file alone), reading no more than 1 MiB + 1 byte of the file.
+  EXPECT_TRUE(contains(refusal(std::string((1 << 20) + 1, '#')), "(the limit falls on line 1, in a comment)"));
+  const std::string long_value = refusal(kScene + "integrator: " + std::string(30 << 20, 'q') + "\n");
+  EXPECT_TRUE(contains(long_value, "(the limit falls on line 9, in integrator)")) << long_value;
+  const std::string nested_value = refusal(kScene + "extra:\n  deeper: " + std::string(2 << 20, '7') + "x\n");
+  EXPECT_TRUE(contains(nested_value, "(the limit falls on line 10, in extra/deeper)")) << nested_value;
+  std::string deep = kScene;
+  for (int level = 0; level < 3000; ++level) deep += std::string(2 * level, ' ') + "k" + std::to_string(level) + ":\n";
+  const std::string too_deep = refusal(deep);
+  EXPECT_TRUE(contains(too_deep, "in k0/.../k1020, nested 1021 levels deep)")) << too_deep;
+  const std::string long_key = refusal(kScene + std::string(1 << 20, 'k') + ": 1\n");
+  EXPECT_TRUE(contains(long_key, "(the limit falls on line 9, in the text 'kkkk")) << long_key;
 
   // A FIFO nobody writes: in a child process, so that the old behaviour (open() waits for a
   // writer for ever) fails the test instead of hanging it.
