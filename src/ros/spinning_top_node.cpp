@@ -176,6 +176,18 @@ bool yields_clock(const std::string& node) {
          static_cast<std::string>(value) == "auto";
 }
 
+/// What a (re)started top's release already is, for the response of ~spawn and ~set_state: its
+/// events at t = 0 come before any subscriber can have connected to the topics a spawn creates
+/// (latched, ~event then keeps only the last of them), so the caller learns them here.
+std::string at_release(const Simulator& simulator) {
+  if (simulator.event() != Event::kNone)
+    return std::string("; its release is already an event: ") + to_string(simulator.event()) +
+           " at t = 0, where the run stops";
+  if (simulator.phase() != Phase::kContact)
+    return std::string("; R < 0 at its release: lift_off at t = 0, it goes on in ") + to_string(simulator.phase());
+  return "";
+}
+
 }  // namespace
 
 SpinningTopNode::SpinningTopNode(ros::NodeHandle nh, ros::NodeHandle private_nh)
@@ -1268,7 +1280,7 @@ bool SpinningTopNode::on_spawn(Spawn::Request& request, Spawn::Response& respons
   response.success = true;
   response.message = "top " + top.name() + ": scene " + to_string(top.simulator().config().scene) + ", " +
                      top.simulator().integrator_description() + "; frames " + top.body_frame() + ", " +
-                     top.contact_frame();
+                     top.contact_frame() + at_release(top.simulator());
   // DEBUG, not INFO: the caller has the message in the response, and roscpp puts the names of all
   // the node's topics in each /rosout record (7,000 names, ~165 kB, at the 1,000th top).
   ROS_DEBUG("spinning_top: spawned %s", response.message.c_str());
@@ -1322,7 +1334,8 @@ bool SpinningTopNode::on_set_state(SetState::Request& request, SetState::Respons
   }
   send_static_transforms();
   response.success = true;
-  response.message = format("state set; the top's simulated time 0 is stamped %.9f", stamp_at(clock_.time()).toSec());
+  response.message = format("state set; the top's simulated time 0 is stamped %.9f", stamp_at(clock_.time()).toSec()) +
+                     at_release(top->simulator());
   return true;
 }
 

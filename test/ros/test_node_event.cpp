@@ -10,9 +10,12 @@
 #include <std_msgs/String.h>
 
 #include <cmath>
+#include <cstdio>
 #include <string>
 
 #include "node_test_helpers.hpp"
+#include "spinning_top/SetState.h"
+#include "spinning_top/Spawn.h"
 #include "spinning_top/TopEvent.h"
 
 using node_test::finite;
@@ -138,6 +141,49 @@ TEST(NodeEvent, ALiftOffAtTheReleaseIsReportedAndNoNegativeForceIsPublished) {
   ASSERT_TRUE(wait_for([&] { return events.size() >= 2; }, 20.0));
   EXPECT_EQ(events.messages()[0].data, "");
   EXPECT_EQ(events.messages()[1].data, "lift_off");
+}
+
+// A spawned top's topics are new, so its events at t = 0 come before any subscriber has connected
+// (the latched ~event keeps only the last of a lift-off and an early landing): the responses of
+// ~spawn and ~set_state say what the release already is. The node above has after_lift_off: stop.
+TEST(NodeEvent, SpawnAndSetStateSayWhenTheReleaseIsAnEvent) {
+  ros::NodeHandle nh;
+  spinning_top::Spawn stopper;
+  stopper.request.name = "stopper";  // the node's own keys: R < 0 at its release, may not fly
+  ASSERT_TRUE(ros::service::call("/released/spawn", stopper));
+  ASSERT_TRUE(stopper.response.success) << stopper.response.message;
+  std::printf("[ measured ] spawn: %s\n", stopper.response.message.c_str());
+  EXPECT_NE(stopper.response.message.find("its release is already an event: lift_off at t = 0, where the run stops"),
+            std::string::npos)
+      << stopper.response.message;
+  spinning_top::Spawn flier;
+  flier.request.name = "flier";
+  // (config/extreme/lift_off.yaml's release flies without the rim if its precession is reversed)
+  flier.request.keys = {"after_lift_off=fly", "rim_radius=0", "rim_distance=0", "initial/tilt=0.8",
+                        "initial/precession_rate=-40"};
+  flier.request.x = 1.0;
+  ASSERT_TRUE(ros::service::call("/released/spawn", flier));
+  ASSERT_TRUE(flier.response.success) << flier.response.message;
+  std::printf("[ measured ] spawn: %s\n", flier.response.message.c_str());
+  EXPECT_NE(flier.response.message.find("R < 0 at its release: lift_off at t = 0, it goes on in flight"),
+            std::string::npos)
+      << flier.response.message;
+  // set_state: a release that stays on the floor says nothing of the kind; one with R < 0 does.
+  spinning_top::SetState state;
+  state.request.name = "flier";
+  state.request.tilt = 0.3;
+  state.request.spin = 150.0;
+  state.request.x = 1.0;
+  ASSERT_TRUE(ros::service::call("/released/set_state", state));
+  ASSERT_TRUE(state.response.success) << state.response.message;
+  EXPECT_EQ(state.response.message.find("lift_off"), std::string::npos) << state.response.message;
+  state.request.tilt = 0.8;
+  state.request.precession_rate = -40.0;
+  ASSERT_TRUE(ros::service::call("/released/set_state", state));
+  ASSERT_TRUE(state.response.success) << state.response.message;
+  EXPECT_NE(state.response.message.find("R < 0 at its release: lift_off at t = 0, it goes on in flight"),
+            std::string::npos)
+      << state.response.message;
 }
 
 int main(int argc, char** argv) { return node_test::run_node_tests(argc, argv, "test_node_event", 2); }
