@@ -1440,8 +1440,9 @@ def gen_sweep(ctx, rng):
             spec, expect = f"{key}={lo}:{rng.choice(bad_x)}:2", "refuse"
         elif form == "list":
             x = rng.choice(bad_x)
-            # a list value the core refuses may be a 'refused' row (documented); text must not parse
-            spec, expect = f"{key}={lo},{x},{hi}", ("either" if x in ("nan", "inf", "-inf", "1e999") else "refuse")
+            # a list value the core refuses may be a 'refused' row (documented); text must not parse.
+            # "1,5" inside a list is two valid values (lo,1,5,hi), not a decimal comma.
+            spec, expect = f"{key}={lo},{x},{hi}", ("either" if x in ("nan", "inf", "-inf", "1e999", "1,5") else "refuse")
         else:
             spec, expect = None, "refuse"
         if spec is None:
@@ -2144,9 +2145,14 @@ def gen_node(ctx, rng):
                 return "clear error", first_line(r["message"])
             if r.get("min_R") is not None and r["min_R"] < -1e-9:
                 return "silently wrong", f"~normal_force published R = {r['min_R']:.3g} N"
-            if "lift_off" not in r.get("events", []):
-                return "silently wrong", f"no lift_off on ~event (events: {r.get('events')})"
-            return "valid edge value", f"lift_off published, least R {r.get('min_R')}"
+            if "lift_off" in r.get("events", []):
+                return "valid edge value", f"lift_off published, least R {r.get('min_R')}"
+            # A spawn creates the topics: its events at t = 0 may come before this subscriber has
+            # connected (latched, ~event then keeps only the last). The response must say it.
+            if how == "spawn" and "lift_off at t = 0" in r.get("message", ""):
+                return "valid edge value", (f"lift_off in the response (~event had {r.get('events')}), "
+                                            f"least R {r.get('min_R')}")
+            return "silently wrong", f"no lift_off on ~event (events: {r.get('events')}) nor in the response"
         cases.append(Case("node", f"~{how} with R < 0 at release (tilt {tilt}, precession {prec})", "accept", [], fn,
                           classify=classify))
     liftoff_case("set_state", 0.6, -50.0)
@@ -2193,7 +2199,53 @@ def gen_node(ctx, rng):
                  ({"spin": 1e300}, "refuse", ["spin"]), ({"inertia_axial": 1.0}, "refuse", ["inertia_axial"]),
                  ({"gravity": 9.5}, "accept", [])]
     for cfg, expect, names in dyn_cases:
+        if "friction" in cfg:
+            continue  # below: whether it applies depends on the tops the node runs
         dyn("", expect, names, cfg)
+
+    # friction applies to viscous tops alone: refused while the node runs none (the fixed-tip node
+    # without the viscous top an earlier case spawned), applied to the one it then spawns.
+    def dyn_friction(with_viscous_top, value):
+        def fn():
+            ensure_node()
+            rig.client({"op": "call", "srv": "/st/kill", "type": "spinning_top/Kill", "req": {"name": "visc"}})
+            if with_viscous_top:
+                rig.client({"op": "call", "srv": "/st/spawn", "type": "spinning_top/Spawn",
+                            "req": {"name": "visc", "scene_file": ctx.config("viscous"), "keys": [], "x": 0.5,
+                                    "y": 0.0}})
+            r = rig.client({"op": "dyn", "node": "/st", "cfg": {"friction": value}})
+            rig.after_call(r)
+            res = Res()
+            res.extra["r"] = r
+            res.extra["alive"] = rig.node.poll() is None
+            return res
+
+        expect = "accept" if with_viscous_top else "refuse"
+
+        def classify(res):
+            r = res.extra["r"]
+            if not res.extra["alive"]:
+                rig.node = None
+                return "crash", "node died"
+            if r.get("timeout"):
+                return "hang", "no answer"
+            if "exc" in r:
+                return "unclear error or traceback", f"{r['exc']}: {r['msg'][:100]}"
+            status = r["status"] or ""
+            if status.startswith("refused"):
+                if expect == "accept":
+                    return "silently wrong", "refused with a viscous top running: " + first_line(status)
+                p = message_problem(status, ["friction"])
+                return ("unclear error or traceback", f"{p}: {first_line(status)}") if p else \
+                    ("clear error", first_line(status))
+            if expect == "refuse":
+                return "accepted garbage", "applied with no viscous top: " + first_line(status)
+            return "valid edge value", first_line(status)
+        desc = "a viscous top running" if with_viscous_top else "no viscous top"
+        cases.append(Case("node", f"dynamic_reconfigure {{'friction': {value}}} with {desc}", expect,
+                          ["friction"], fn, classify=classify))
+    dyn_friction(False, 0.5)
+    dyn_friction(True, round(rng.uniform(0.1, 2.0), 3))
 
     # kill
     service("name ''", "refuse", ["name"], "kill", "spinning_top/Kill", {"name": ""})
