@@ -8,9 +8,20 @@ source "$(dirname "$0")/env.sh"
 "$SPINNING_TOP_ROOT/scripts/build.sh"
 rm -rf "$SPINNING_TOP_BUILD/test_results"
 set +e
-make -C "$SPINNING_TOP_BUILD" run_tests -j1 2>&1 | tee "$SPINNING_TOP_BUILD/run_tests.log" | \
+# make writes to the log file and the progress is read from it until make exits: a process that a
+# failed test leaves running (a node it started) keeps no pipe open that this script would wait on.
+make -C "$SPINNING_TOP_BUILD" run_tests -j1 > "$SPINNING_TOP_BUILD/run_tests.log" 2>&1 &
+make_pid=$!
+tail --pid="$make_pid" -n +1 -f "$SPINNING_TOP_BUILD/run_tests.log" | \
   grep -E --line-buffered '^\[ *(RUN|OK|FAILED|PASSED) *\]|^\[ROSTEST\]|^\[Testcase|FAILURE|ERROR|Error [0-9]'
-make_status=${PIPESTATUS[0]}
+wait "$make_pid"
+make_status=$?
+# A node still running from this build is a test's leak: name it and stop it.
+if command -v pgrep > /dev/null && leftovers=$(pgrep -a -f "$SPINNING_TOP_BUILD/devel/lib/spinning_top/"); then
+  echo "test.sh: processes left running by the tests (killed):" >&2
+  echo "$leftovers" >&2
+  pkill -KILL -f "$SPINNING_TOP_BUILD/devel/lib/spinning_top/" || true
+fi
 # Still without -e: catkin_test_results and the count exit 1 on a failure, and their summaries
 # (the failed tests, the 'N passed, N failed' line CI reads) must be printed all the same.
 catkin_test_results "$SPINNING_TOP_BUILD/test_results" --verbose > "$SPINNING_TOP_BUILD/test_summary.log" 2>&1
