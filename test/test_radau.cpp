@@ -10,6 +10,7 @@
 #include "spinning_top/integrators/registry_rows.hpp"
 #include "spinning_top/integrators/dop853.hpp"
 #include "spinning_top/integrators/radau.hpp"
+#include "spinning_top/integrators/radau9.hpp"
 #include "spinning_top/scenes/viscous.hpp"
 
 namespace spinning_top {
@@ -31,11 +32,12 @@ Viscous::State dop853_reference(const Viscous& model, double t) {
 /// radau5 at fixed steps through the Method interface, as the driver would run it without error
 /// control: attempt(), then prepare_dense() to accept (which also hands the step's collocation
 /// polynomial to the next step as Newton's starting guess).
+template <class Method = Radau>
 Viscous::State radau_fixed_steps(const Viscous& model, double dt, double duration) {
-  Radau method;
+  Method method;
   method.restart();
-  Radau::Attempt attempt;
-  Radau::DenseStep dense;
+  typename Method::Attempt attempt;
+  typename Method::DenseStep dense;
   Viscous::State y = model.initial_state(), f;
   model.derivative(y, f);
   const long n = std::lround(duration / dt);
@@ -61,6 +63,55 @@ TEST(Radau5, FixedStepsConvergeAtFifthOrder) {
   report("radau5 fixed 1 ms, state error at 0.5 s", fine);
   EXPECT_GT(fine, 1e-11);  // above the reference's floor: the ratio is not noise
   EXPECT_NEAR(std::log2(coarse / fine), 5.0, 0.15);
+}
+
+TEST(Radau9, FixedStepsConvergeAtNinthOrder) {
+  // The 5-stage Radau IIA: halving 10 ms -> 5 ms divides the global error by 2^9 = 512. Measured
+  // on the slipping top at k = 0.5: see the output (both far above dop853's ~1e-13 floor).
+  const Viscous model = slipping_top(0.5);
+  const Viscous::State exact = dop853_reference(model, 0.5);
+  const double coarse = (radau_fixed_steps<RadauIIA9<Viscous>>(model, 10e-3, 0.5) - exact).norm();
+  const double fine = (radau_fixed_steps<RadauIIA9<Viscous>>(model, 5e-3, 0.5) - exact).norm();
+  report("radau9 fixed 10 ms, state error at 0.5 s", coarse);
+  report("radau9 fixed 5 ms, state error at 0.5 s", fine);
+  EXPECT_GT(fine, 1e-11);  // above the reference's floor: the ratio is not noise
+  EXPECT_NEAR(std::log2(coarse / fine), 9.0, 0.3);
+}
+
+TEST(Radau9, StiffFrictionAtTheErrorOfRadau5WithAFifthOfItsSteps) {
+  // Why radau9 exists (radau9.hpp): on stiff friction (k = 1e3 and 1e5: relaxation rates 2e4 and
+  // 2e6 1/s) radau5 needs ~1e-4 s steps at 1e-14, radau9 ~1e-3 s at 1e-12 for an error as small.
+  // Both asked every 1 ms over 1 s (dense output: partial collocation steps), against radau5 at
+  // 1e-15 (a third method: dop853 crawls at its stability limit here). Measured: see the output.
+  for (const double k : {1e3, 1e5}) {
+    const Viscous model = slipping_top(k);
+    AdaptiveDriver<Viscous, Radau> reference(1e-15), radau5(1e-14);
+    AdaptiveDriver<Viscous, RadauIIA9<Viscous>> radau9(1e-12);
+    reference.reset(model, 0.0, model.initial_state());
+    radau5.reset(model, 0.0, model.initial_state());
+    radau9.reset(model, 0.0, model.initial_state());
+    double error5 = 0.0, error9 = 0.0, force9 = 0.0;
+    for (int i = 1; i <= 1000; ++i) {
+      const double t = i * 1e-3;
+      ASSERT_EQ(reference.advance_to(model, t), Event::kNone);
+      ASSERT_EQ(radau5.advance_to(model, t), Event::kNone);
+      ASSERT_EQ(radau9.advance_to(model, t), Event::kNone);
+      const Quaternion q = attitude_of(reference.state());
+      error5 = std::max(error5, core_test::attitude_difference(attitude_of(radau5.state()), q));
+      error9 = std::max(error9, core_test::attitude_difference(attitude_of(radau9.state()), q));
+      force9 = std::max(force9, std::abs(model.normal_force(radau9.state()) - model.normal_force(reference.state())));
+    }
+    const RadauStatistics& s = radau9.stepper().method().statistics();
+    const double mg = model.parameters().mass * model.parameters().gravity;
+    std::printf("[ measured ] k = %g: radau5 1e-14 %ld steps, %.3g rad; radau9 1e-12 %ld steps (%ld rejected, %ld "
+                "low-rank attempts of %ld, %ld Newton failures), %.3g rad, R %.3g m g\n",
+                k, radau5.steps(), error5, radau9.steps(), radau9.rejected_steps(), s.low_rank_attempts, s.attempts,
+                s.newton_failures, error9, force9 / mg);
+    EXPECT_LT(radau9.steps() * 5, radau5.steps());
+    EXPECT_LT(error9, std::max(2.0 * error5, 1e-12));
+    EXPECT_LT(force9, 1e-8 * mg);  // the default's bar
+    EXPECT_GE(s.low_rank_attempts, s.attempts - s.attempts / 100);  // Woodbury, not 55 x 55 LUs
+  }
 }
 
 /// Largest error of radau5 at `tolerance` over 1 s, asked every 1 ms (dense output), against

@@ -27,7 +27,7 @@ enum class Phase { kContact, kFlight, kSkim };
 /// kind (integrators/registry_rows.hpp defines them). kAuto runs auto_plan()'s choice.
 /// doc/integrators.md explains them.
 enum class IntegratorType {
-  kAuto, kRk4, kDopri5, kDop853, kSplitting4, kSplitting6, kSplitting8, kGauss6, kRadau5, kRodas4, kExact
+  kAuto, kRk4, kDopri5, kDop853, kSplitting4, kSplitting6, kSplitting8, kGauss6, kRadau5, kRadau9, kRodas4, kExact
 };
 
 const char* to_string(SceneType scene);
@@ -39,7 +39,7 @@ AfterLiftOff parse_after_lift_off(const std::string& name);
 /// Parses "fixed_tip" | "frictionless" | "viscous"; throws InvalidParameter("scene", ...).
 SceneType parse_scene(const std::string& name);
 /// Parses "auto" | "rk4" | "dopri5" | "dop853" | "splitting4" | "splitting6" | "splitting8" | "gauss6" |
-/// "radau5" | "rodas4" | "exact";
+/// "radau5" | "radau9" | "rodas4" | "exact";
 /// throws InvalidParameter("integrator", ...).
 IntegratorType parse_integrator(const std::string& name);
 
