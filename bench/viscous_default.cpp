@@ -1,6 +1,6 @@
 // The viscous scene's default (integrator: auto) from k = 0 to m/k = 1e-8 s: its error against an
 // independent reference and its CPU time, at the node's request pattern (a state every 1 ms), and
-// the work-precision of radau5 / dop853 against Boost.Odeint's RKF78 and rosenbrock4
+// the work-precision of radau9 / radau5 / dop853 against Boost.Odeint's RKF78 and rosenbrock4
 // (doc/integrators.md, "Viscous: the default and its accuracy").
 //
 // Errors over the run, sampled every 1 ms: the whole attitude (the rotation angle between the
@@ -14,7 +14,7 @@
 //
 // Usage: viscous_default [--duration S] [--output-dir DIR] [--quick] [--case NAME] [--no-peers] [--sweep]
 //                        [--repeats N]  (CPU: median of N runs, 3 by default, 1 with --quick)
-// (--sweep: radau5 and dop853 at tolerances 1e-8 ... 1e-14 for every case, as for the peers)
+// (--sweep: radau9, radau5 and dop853 at tolerances 1e-8 ... 1e-14 for every case, as for the peers)
 // Writes DIR/viscous_default.csv and DIR/viscous_peers.csv; prints markdown tables.
 #include <time.h>
 
@@ -334,6 +334,8 @@ void peers(const Case& base, double k, double duration, const Reference& referen
     return cpu;
   };
   for (const double tolerance : kTolerances)
+    if (ours(IntegratorType::kRadau9, tolerance) > kMaxCpu) break;
+  for (const double tolerance : kTolerances)
     if (ours(IntegratorType::kRadau5, tolerance) > kMaxCpu) break;
   if (lambda <= 2.5e6)
     for (const double tolerance : kTolerances)
@@ -498,7 +500,7 @@ int main(int argc, char** argv) {
     peer_csv << "case,method,k,tolerance,cpu_seconds,steps,max_attitude_error_rad,max_normal_force_error_mg,"
                 "max_energy_balance_error_mgh,meets_target\n";
     peer_csv.precision(4);
-    std::printf("\nradau5 and dop853 through the Simulator, odeint's RKF78 (steps clipped at the samples) and "
+    std::printf("\nradau9, radau5 and dop853 through the Simulator, odeint's RKF78 (steps clipped at the samples) and "
                 "rosenbrock4 (dense output):\n");
     std::printf("\n| case | method | tolerance | steps | CPU [s] | attitude [rad] | R [m g] | E+W-E0 [m g h] | meets 1e-9 rad, 1e-8 m g |\n");
     std::printf("|---|---|---|---|---|---|---|---|---|\n");

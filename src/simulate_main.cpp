@@ -200,7 +200,7 @@ void print_help(std::ostream& out) {
          "Output: a comment naming the integrator that ran, e.g.\n"
          "  # integrator: auto: exact: closed form, nutation period 0.058 s, 9 Fourier terms\n"
          "  # integrator: auto: dop853, tolerance 1e-12 (exact refused: <its reason>)\n"
-         "  # integrator: auto: radau5, tolerance 1e-14 (stiff: friction rate k (1/m + h^2/A) 2e+06 1/s > 100 x\n"
+         "  # integrator: auto: radau9, tolerance 1e-13 (stiff: friction rate k (1/m + h^2/A) 2e+06 1/s > 30 x\n"
          "    fastest motion 225 rad/s)\n"
          "then the CSV header\n"
          "  "

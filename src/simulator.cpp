@@ -118,11 +118,13 @@ double largest_fixed_step(const SceneConfig& config, IntegratorType type) {
 }
 
 namespace {
-// auto in the viscous scene: radau5 when lambda = k (1/m + h^2/A) exceeds this many times the
+// auto in the viscous scene: radau9 when lambda = k (1/m + h^2/A) exceeds this many times the
 // fastest motion's rate, else dop853; each at its fraction of the `tolerance` key. The cost
 // crossover with radau5's low-rank Newton, measured at 25-35 (doc/integrators.md); 100 before it.
+// radau9 (order 9) has replaced radau5 (order 5) above it: the same low-rank Newton, ~15x fewer
+// steps at the default's accuracy (doc/integrators.md, "Viscous: RADAU9").
 constexpr double kStiffFrictionRatio = 30.0;
-constexpr double kRadauToleranceFactor = 0.01;
+constexpr double kRadauToleranceFactor = 0.1;
 constexpr double kDop853ToleranceFactor = 0.1;
 /// A fixed step auto chooses is at most this share of the largest the method can take, so that
 /// auto is never refused a step.
@@ -137,7 +139,7 @@ std::string format_number(double value) {
 
 std::string auto_rule_summary() {
   return "exact where it serves the scene, and dop853 for a state exact refuses, at the tolerance but at most " +
-         format_number(kAutoFallbackTolerance) + "; in the other scenes radau5 at tolerance x " +
+         format_number(kAutoFallbackTolerance) + "; in the other scenes radau9 at tolerance x " +
          format_number(kRadauToleranceFactor) + " where friction relaxes the slip more than " +
          format_number(kStiffFrictionRatio) + " times faster than the fastest motion, k (1/m + h^2/A) > " +
          format_number(kStiffFrictionRatio) + " max(C |omega_Z|/A', sqrt(m g h/A'), |omega|/2), else dop853 at " +
@@ -155,11 +157,15 @@ AutoPlan auto_plan(const SceneConfig& config) {
     return plan;
   }
   // Viscous: stiff when friction relaxes the slip much faster than the top moves. dop853's step
-  // is then bounded by its stability (|dt lambda| <~ 5) rather than by its accuracy, and radau5,
-  // whose step only the motion bounds, is cheaper: kStiffFrictionRatio is the measured cost
-  // crossover (doc/integrators.md, "Viscous: the default"). radau5's error estimate filters the
-  // stiff components (they are damped), but R reads the slip velocity times k, whose error needs
-  // a tighter tolerance: kRadauToleranceFactor. dop853 runs 10x tighter than the key because
+  // is then bounded by its stability (|dt lambda| <~ 5) rather than by its accuracy, and an
+  // L-stable Radau IIA method, whose step only the motion bounds, is cheaper: kStiffFrictionRatio
+  // is the measured cost crossover (doc/integrators.md, "Viscous: the default"). radau9 rather
+  // than radau5: at the default's accuracy its order 9 takes ~2 ms steps where radau5's order 5
+  // needs ~0.1 ms (doc/integrators.md, "Viscous: RADAU9"). Its error estimate filters the stiff
+  // components (they are damped), but R reads the slip velocity times k, whose error needs a
+  // tighter tolerance: kRadauToleranceFactor (after a sideways start at 0.3 m/s, k = 1e3, R was
+  // off by up to 5.7e-9 m g at the key itself, 2.7e-9 at a tenth of it, which also costs less
+  // at 1 kHz: better starting guesses). dop853 runs 10x tighter than the key because
   // friction changes omega_Z, which the error norm weighs relative to its size (2000 rad/s x
   // 1e-12 per step), and an error in omega_Z grows linearly into the spin angle: at the key
   // itself a 2000 rad/s top under k = 50 N s/m ends 1.1e-9 rad off after 10 s, at a tenth of it
@@ -168,7 +174,7 @@ AutoPlan auto_plan(const SceneConfig& config) {
   const double motion = rates.fastest_oscillation();
   const bool stiff = rates.friction > kStiffFrictionRatio * motion;
   plan.first = settings;
-  plan.first.type = stiff ? IntegratorType::kRadau5 : IntegratorType::kDop853;
+  plan.first.type = stiff ? IntegratorType::kRadau9 : IntegratorType::kDop853;
   plan.first.tolerance =
       std::max(kLeastTolerance, settings.tolerance * (stiff ? kRadauToleranceFactor : kDop853ToleranceFactor));
   plan.first.step = std::min(settings.step, kAutoStepShare * largest_fixed_step(config, plan.first.type));

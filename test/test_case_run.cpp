@@ -160,7 +160,7 @@ TEST(MotionRange, TrackedExtremesOfDop853MatchTheClosedForm) {
 
 // The viscous top has no closed form: the tracked extremes bound dense samples (every 5 us over
 // 1 s, which resolve a nutation peak to ~4e-8 of its amplitude, and every 0.25 us over the slip's
-// relaxation at the start) and exceed them by no more than that, from weak friction to the stiff end (k = 500: lambda = 5e4/s, radau5 under auto); and
+// relaxation at the start) and exceed them by no more than that, from weak friction to the stiff end (k = 500: lambda = 5e4/s, radau9 under auto); and
 // tracking changes no state of the run, bit for bit.
 TEST(MotionRange, TrackedExtremesOfTheViscousTopBoundDenseSamples) {
   for (double friction : {0.02, 5.0, 500.0}) {

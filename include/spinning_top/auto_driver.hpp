@@ -4,7 +4,7 @@
 // degenerate states), the plan's fallback from the same state, and keeps what it chose and why
 // (choice()). To SceneSimulator it is just another driver.
 // Its candidates are the drivers of the integrators auto may choose (kAutoCandidates) that serve
-// the scene: exact and dop853 for the integrable scenes, dop853 and radau5 for the viscous one.
+// the scene: exact and dop853 for the integrable scenes, dop853 and radau9 for the viscous one.
 #pragma once
 
 #include <iterator>

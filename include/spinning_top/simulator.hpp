@@ -111,7 +111,7 @@ std::string auto_rule_summary();
 /// The integrators auto_plan() chooses among, as first choices or fallbacks: auto's driver
 /// (auto_driver.hpp) holds the drivers of those that serve its scene, and no other.
 inline constexpr IntegratorType kAutoCandidates[] = {IntegratorType::kExact, IntegratorType::kDop853,
-                                                     IntegratorType::kRadau5};
+                                                     IntegratorType::kRadau9};
 
 /// Which method runs, and why.
 struct IntegratorChoice {
