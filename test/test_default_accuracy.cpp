@@ -7,7 +7,9 @@
 // References: dop853 at tolerance 1e-14 for the fixed tip and the frictionless top (their default
 // is the closed form, so the reference must be another method; measured ~1e-12 rad over 10 s on
 // these motions) and for viscous friction that is not stiff; radau5 at 1e-14 for stiff friction,
-// where an explicit method would need ~1e8 steps. Event times against the energy-integral
+// where an explicit method would need ~1e8 steps (the default runs radau9 there, a different
+// method; radau5's own R is uncertain by up to ~4e-9 m g on a strongly nutating top at k = 1e5,
+// where radau9 at 1e-12, 1e-13 and 1e-14 all sit 4.2e-9 m g from it). Event times against the energy-integral
 // quadratures of extreme_cases.hpp (ReducedTop).
 #include <gtest/gtest.h>
 
