@@ -197,7 +197,7 @@ TEST(Radau5, AnswersBetweenStiffStepsKeepTheNormalForce) {
   // slip-velocity error dv enters R as k dv. The collocation cubic interpolates q, omega and v_G
   // separately, and v_P between its nodes leaves the slow manifold; the partial collocation steps
   // lie on it. Reference: radau5 at 1e-14 asked at the same times. One 0.25 ms step (about what
-  // radau5 takes here at the default's 1e-14) from t = 0.1 s. Measured: R within 1.5e-11 m g for
+  // radau5 takes here at 1e-14, auto's setting for it before radau9) from t = 0.1 s. Measured: R within 1.5e-11 m g for
   // the partial steps (6.5e-10 with one partial step instead of dense()'s two), 3.1e-7 m g off
   // for the cubic.
   const Viscous model = slipping_top(1e5);

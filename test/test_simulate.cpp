@@ -387,7 +387,7 @@ TEST_F(SimulateTest, ADirectoryAsOutputIsRefusedWithCode2AndADashIsStdout) {
 
 // Determinism (doc/simulate.md): the same inputs on the same build give the same bytes, and the
 // default's rows do not depend on the output rate either (exact answers each instant in closed
-// form, dop853 and radau5 by dense output, so requests never move their steps): the rows at the
+// form, dop853 and radau9 by dense output, so requests never move their steps): the rows at the
 // instants two rates share are equal to the bit.
 TEST_F(SimulateTest, TheDefaultsRowsAreBitIdenticalAcrossRunsAndOutputRates) {
   for (const char* scene : {"fixed_tip", "frictionless", "viscous"}) {

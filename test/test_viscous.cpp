@@ -209,7 +209,8 @@ Run simulator_run(const SceneConfig& config, std::string* description = nullptr)
 }
 
 /// radau5 at 1e-15 through its driver: below validate()'s 1e-14 floor (radau5's estimate is
-/// mapped to 0.1 tol^(2/3) = 1e-11, far from round-off), 10x tighter than the default's 1e-14.
+/// mapped to 0.1 tol^(2/3) = 1e-11, far from round-off), and a method other than the default's
+/// radau9 at 1e-13 (radau5 at 1e-14 until radau9 took its place).
 Run radau_reference(const SceneConfig& config) {
   auto model = std::make_shared<Viscous>(config.top, config.initial);
   auto driver = std::make_shared<AdaptiveDriver<Viscous, RadauIIA5<Viscous>>>(1e-15);
