@@ -85,18 +85,24 @@ void validate(const IntegratorSettings& settings) {
 
 double MotionRates::fastest_oscillation() const { return std::max({nutation, pendulum, attitude}); }
 
-MotionRates motion_rates(const SceneConfig& config) {
-  const TopParameters& p = config.top;
+MotionRates motion_rates(SceneType scene, const TopParameters& p, const InitialConditions& initial) {
   // The sliding top's transverse inertia about G lies between A and A + m h^2 sin^2(theta):
   // A gives the upper bound of its nutation rate.
-  const double transverse = config.scene == SceneType::kFixedTip ? p.inertia_about_tip() : p.inertia_transverse;
+  const double transverse = scene == SceneType::kFixedTip ? p.inertia_about_tip() : p.inertia_transverse;
   MotionRates rates;
-  rates.nutation = p.inertia_axial * std::abs(config.initial.spin) / transverse;
+  rates.nutation = p.inertia_axial * std::abs(initial.spin) / transverse;
   rates.pendulum = std::sqrt(p.mass * p.gravity * p.tip_distance / transverse);
-  rates.attitude = 0.5 * initial_body_rates(config.initial).norm();
-  if (config.scene == SceneType::kViscous)
+  rates.attitude = 0.5 * initial_body_rates(initial).norm();
+  if (scene == SceneType::kViscous)
     rates.friction = p.friction * (1.0 / p.mass + p.tip_distance * p.tip_distance / p.inertia_transverse);
   return rates;
+}
+
+MotionRates motion_rates(const SceneConfig& config) { return motion_rates(config.scene, config.top, config.initial); }
+
+double largest_resolving_step(SceneType scene, const TopParameters& top, const InitialConditions& initial) {
+  const double fastest = motion_rates(scene, top, initial).fastest_oscillation();
+  return fastest > 0.0 ? 2.0 / fastest : std::numeric_limits<double>::infinity();
 }
 
 namespace {

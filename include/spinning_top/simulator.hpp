@@ -10,12 +10,12 @@
 #include "spinning_top/events.hpp"
 #include "spinning_top/kinematics.hpp"
 #include "spinning_top/model_outputs.hpp"
+#include "spinning_top/motion_rates.hpp"
 #include "spinning_top/parameters.hpp"
 #include "spinning_top/work_budget.hpp"
 
 namespace spinning_top {
 
-enum class SceneType { kFixedTip, kFrictionless, kViscous };
 /// What the run does where the tip would leave the floor (HYBRID.md, "lift_off"): fly on (and
 /// land, bounce, skim), or stop there with the event `lift_off` (the seed's contact model alone).
 enum class AfterLiftOff { kFly, kStop };
@@ -68,15 +68,7 @@ struct SceneConfig {
 /// velocity only in the viscous scene, friction only there). Throws InvalidParameter.
 void validate(const SceneConfig& config);
 
-/// Rates [1/s] of the fastest motions of a configuration, which a fixed step must resolve.
-struct MotionRates {
-  double nutation = 0.0;   ///< C |omega_Z| / A' (A' = A0 for the fixed tip, A when sliding)
-  double pendulum = 0.0;   ///< sqrt(m g h / A')
-  double attitude = 0.0;   ///< |omega(0)| / 2: the rate of the quaternion ODE q' = q (0, omega) / 2
-  double friction = 0.0;   ///< lambda = k (1/m + h^2/A): relaxation rate of v_P (viscous)
-  /// The fastest of nutation, pendulum and attitude (what every fixed-step method must resolve).
-  double fastest_oscillation() const;
-};
+/// motion_rates.hpp's rates of the configuration's top.
 MotionRates motion_rates(const SceneConfig& config);
 
 /// The largest fixed step [s] that `type` can take on this configuration: 2 / (fastest rate),

@@ -8,6 +8,7 @@
 
 #include "spinning_top/kinematics.hpp"
 #include "spinning_top/model_outputs.hpp"
+#include "spinning_top/motion_rates.hpp"
 #include "spinning_top/parameters.hpp"
 #include "spinning_top/scenes/sliding_contact.hpp"
 
@@ -87,6 +88,9 @@ class Frictionless {
   double energy_balance(const State& y) const { return energy_without_spin(y); }
 
   const TopParameters& parameters() const { return parameters_; }
+  /// The largest step that resolves this top's fastest oscillation (motion_rates.hpp): the
+  /// adaptive controllers' cap.
+  double largest_resolving_step() const { return spinning_top::largest_resolving_step(SceneType::kFrictionless, parameters_, initial_); }
   const InitialConditions& initial_conditions() const { return initial_; }
   double spin() const { return spin_; }
 
