@@ -46,6 +46,7 @@
 
 #include "spinning_top/integration/controllers.hpp"
 #include "spinning_top/integrators/jacobian.hpp"
+#include "spinning_top/integrators/small_lu.hpp"
 
 namespace spinning_top {
 
@@ -437,7 +438,7 @@ class RadauIIA5 {
   };
   struct LowRankFactorization {
     StiffFactors stage[kStages];
-    Eigen::PartialPivLU<Coupling> s;
+    SmallLu<kStages * kRank> s;
     double h = 0.0;
   };
 
