@@ -98,19 +98,28 @@ struct StiffRankOf : std::integral_constant<int, 0> {};
 template <class Model>
 struct StiffRankOf<Model, std::void_t<decltype(Model::kStiffRank)>> : std::integral_constant<int, Model::kStiffRank> {};
 
-/// radau5.f's tolerance map (rtol' = 0.1 rtol^(2/3)): the controller's error norm is
-/// (|err| / rtol')^(3/2) / rtol, i.e. the vector err scaled by (|err| / 0.1)^(1/2) / 0.1, with
-/// |err| the RMS over 1 + max(|y0|, |y1|), the controller's own scale, so the map needs no
-/// tolerance. err is O(h^4) (an embedded order-3 solution, sec. IV.8): the mapped norm is O(h^6),
-/// and the controller's exponent 1/6 on it is radau5.f's 1/4 on err.
-struct Radau5ToleranceMap {
+/// radau.f's tolerance map for an estimate err = O(h^kErrorPower) of a method whose controller
+/// runs on O(h^kMappedPower): the error norm is err scaled by (|err| / 0.1)^e / 0.1 with
+/// e = kMappedPower / kErrorPower - 1, |err| the RMS over 1 + max(|y0|, |y1|), the controller's
+/// own scale, so the map needs no tolerance. radau5 (sec. IV.8: err O(h^4) from an embedded
+/// order-3 solution): rtol' = 0.1 rtol^(2/3), e = 1/2, and the controller's exponent 1/6 on the
+/// mapped norm is radau5.f's 1/4 on err. radau9 (err O(h^6)): rtol' = 0.1 rtol^(3/5), e = 2/3,
+/// and 1/10 on the mapped norm is radau.f's 1/6 on err.
+template <int kMappedPower, int kErrorPower>
+struct RadauToleranceMap {
   template <class State>
   static State map(const State& err, const State& y0, const State& y1) {
     const State scale = (1.0 + y0.cwiseAbs().cwiseMax(y1.cwiseAbs()).array()).matrix();
     const double norm = std::sqrt(err.cwiseQuotient(scale).squaredNorm() / static_cast<double>(err.size()));
-    return err * (std::sqrt(norm / 0.1) / 0.1);
+    if constexpr (2 * kMappedPower == 3 * kErrorPower) {
+      return err * (std::sqrt(norm / 0.1) / 0.1);  // e = 1/2: sqrt, exact and cheaper than pow
+    } else {
+      constexpr double e = static_cast<double>(kMappedPower - kErrorPower) / kErrorPower;
+      return err * (std::pow(norm / 0.1, e) / 0.1);
+    }
   }
 };
+using Radau5ToleranceMap = RadauToleranceMap<6, 4>;
 using Radau5Controller = PiController<6, Radau5ToleranceMap>;
 
 template <class Model>

@@ -34,18 +34,8 @@
 
 namespace spinning_top {
 
-/// radau.f's tolerance map for 5 stages (rtol' = 0.1 rtol^(3/5)): the controller's error norm
-/// is (|err| / 0.1)^(5/3), |err| the RMS over 1 + max(|y0|, |y1|) (Radau5ToleranceMap's scale).
-/// err is O(h^6): the mapped norm is O(h^10), and the controller's exponent 1/10 on it is
-/// radau.f's 1/6 on err.
-struct Radau9ToleranceMap {
-  template <class State>
-  static State map(const State& err, const State& y0, const State& y1) {
-    const State scale = (1.0 + y0.cwiseAbs().cwiseMax(y1.cwiseAbs()).array()).matrix();
-    const double norm = std::sqrt(err.cwiseQuotient(scale).squaredNorm() / static_cast<double>(err.size()));
-    return err * (std::pow(norm / 0.1, 2.0 / 3.0) / 0.1);
-  }
-};
+/// radau.f's tolerance map for 5 stages (radau.hpp's RadauToleranceMap: rtol' = 0.1 rtol^(3/5)).
+using Radau9ToleranceMap = RadauToleranceMap<10, 6>;
 using Radau9Controller = PiController<10, Radau9ToleranceMap>;
 
 template <class Model>
