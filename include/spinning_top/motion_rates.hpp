@@ -12,13 +12,13 @@ namespace spinning_top {
 
 enum class SceneType { kFixedTip, kFrictionless, kViscous };
 
-/// Rates [1/s] of the fastest motions of a configuration, which a fixed step must resolve.
+/// Rates [1/s] of the fastest motions of a configuration, which every step must resolve.
 struct MotionRates {
   double nutation = 0.0;   ///< C |omega_Z| / A' (A' = A0 for the fixed tip, A when sliding)
   double pendulum = 0.0;   ///< sqrt(m g h / A')
   double attitude = 0.0;   ///< |omega(0)| / 2: the rate of the quaternion ODE q' = q (0, omega) / 2
   double friction = 0.0;   ///< lambda = k (1/m + h^2/A): relaxation rate of v_P (viscous)
-  /// The fastest of nutation, pendulum and attitude (what every fixed-step method must resolve).
+  /// The fastest of nutation, pendulum and attitude (what every step must resolve).
   double fastest_oscillation() const;
 };
 MotionRates motion_rates(SceneType scene, const TopParameters& top, const InitialConditions& initial);

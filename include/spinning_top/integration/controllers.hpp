@@ -1,7 +1,8 @@
 // Controllers: which step the driver (driver.hpp) tries next, and whether an attempt is kept.
 //   SubstepPlan  fixed-step methods: each request in equal substeps of at most `step`;
 //   PiController embedded pairs: Hairer's PI control of a scaled error norm (with an ErrorMap
-//                for methods that report their estimate on another scale: radau5);
+//                for methods that report their estimate on another scale: radau5, radau9),
+//                each step at most the one that resolves the model's fastest motion;
 //   WholeSpan    a closed form: one step over all time, never rejected.
 // Each declares the integrator kind it makes (IntegratorKind, integrator_registry.hpp): the
 // registry, validation and the documentation read it from here.
@@ -129,7 +130,7 @@ struct ResolvingStep<Model, std::void_t<decltype(std::declval<const Model&>().la
 /// e_prev^0.04), between 0.2 and 10 times this one, and at most the step that resolves the
 /// model's fastest oscillation (ResolvingStep): the event locator clears only resolved steps
 /// without searching their interpolant (event_locator.hpp), and a search costs radau9 two
-/// collocation solves per sample (at tolerance 1e-4 on stiff friction, 10x the steps' work).
+/// collocation solves per sample (at tolerance 1e-4 on very stiff friction, k = 1e5: 10x the steps' work).
 template <int kErrorPower, class ErrorMap = UnmappedError>
 class PiController {
  public:

@@ -193,10 +193,12 @@ class RadauIIA9 {
   // tightening included: the low-rank Newton leaves a remainder of one sign step after step), or
   // corrections that stop contracting at round-off.
   static constexpr double kNewtonTolerance = 1e-18;
-  // A request's collocation solves end sooner: their remainders do not accumulate from step to
-  // step as the steps' do, and at 1e-17 the answers move by round-off alone (R by <= 7.5e-11 m g
-  // at k = 1e7, where changing the LU's rounding alone moves it by 7.2e-11; 1e-16 moved it
-  // by 4.1e-10). 17 % fewer Newton iterations at 1 kHz.
+  // dense()'s collocation solves (requests, the event locator's samples and located events, the
+  // range tracker) end sooner: their remainders do not accumulate from step to step as the
+  // steps' do (a located event state that starts the next phase carries one, once), and at
+  // 1e-17 the answers move by round-off alone (R by <= 7.5e-11 m g at k = 1e7, where changing
+  // the LU's rounding alone moves it by 7.2e-11; 1e-16 moved it by 4.1e-10). 17 % fewer Newton
+  // iterations at 1 kHz.
   static constexpr double kAnswerNewtonTolerance = 1e-17;
   static constexpr double kRoundOffFloor = 1e-14;
 

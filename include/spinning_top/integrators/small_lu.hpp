@@ -18,6 +18,10 @@ class SmallLu {
   using Matrix = Eigen::Matrix<double, N, N>;
   using Vector = Eigen::Matrix<double, N, 1>;
 
+  SmallLu() {
+    for (int k = 0; k < N; ++k) row_of_[k] = k;  // the identity's factors, until compute()
+  }
+
   /// Factors P a = L U (L unit lower, stored below U's diagonal). A zero pivot is kept: solve()
   /// then returns non-finite values, which the Newton iterations treat as a failure.
   void compute(const Matrix& a) {
@@ -59,7 +63,7 @@ class SmallLu {
 
  private:
   Matrix lu_ = Matrix::Identity();
-  int row_of_[N] = {};
+  int row_of_[N];  // row k was swapped with row_of_[k] at step k
 };
 
 }  // namespace spinning_top
