@@ -162,8 +162,8 @@ class PiController {
     const double dmax = std::max(d1, d2);
     const double h1 = (dmax <= 1e-15) ? std::max(1e-6, h0 * 1e-3) : std::pow(0.01 / dmax, kExponent);
     const double h = std::min(100.0 * h0, h1);
-    largest_step_ = ResolvingStep<Model>::of(model);
-    dt_ = std::min(std::isfinite(h) && h > 0.0 ? h : 1e-6, largest_step_);
+    largest_step_ = ResolvingStep<Model>::of(model);  // propose() caps every step with it
+    dt_ = std::isfinite(h) && h > 0.0 ? h : 1e-6;
     previous_error_ = 1e-4;
   }
 
