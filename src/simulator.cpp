@@ -259,7 +259,32 @@ void validate_motion_rates(const SceneConfig& config) {
                                     " rad/s the simulator resolves (doc/integrators.md, \"Motion rates\")");
   };
   if (!(rates.nutation <= kMaxMotionRate)) refuse("initial/spin", "nutation C |omega_Z| / A", rates.nutation);
-  if (!(rates.pendulum <= kMaxMotionRate)) refuse("gravity", "pendulum rate sqrt(m g h / A)", rates.pendulum);
+  if (!(rates.pendulum <= kMaxMotionRate)) {
+    // sqrt(m g h / A) has four keys: name the one whose shipped value (the toy top's) brings the
+    // rate down the most, so that a mass of 1e20 is blamed and not gravity (the first of a tie).
+    const TopParameters shipped;
+    const std::pair<const char*, double TopParameters::*> factors[] = {{"gravity", &TopParameters::gravity},
+                                                                        {"mass", &TopParameters::mass},
+                                                                        {"tip_distance", &TopParameters::tip_distance},
+                                                                        {"inertia_transverse", &TopParameters::inertia_transverse}};
+    const char* culprit = factors[0].first;
+    double lowest = rates.pendulum;
+    for (const auto& [key, field] : factors) {
+      TopParameters reset = config.top;
+      reset.*field = shipped.*field;
+      const double rate = motion_rates(config.scene, reset, ic).pendulum;
+      if (rate < lowest) {
+        lowest = rate;
+        culprit = key;
+      }
+    }
+    const TopParameters& p = config.top;
+    refuse(culprit,
+           "pendulum rate sqrt(m g h / A) (m = " + format_seconds(p.mass) + " kg, g = " + format_seconds(p.gravity) +
+               " m/s^2, h = " + format_seconds(p.tip_distance) + " m, A = " + format_seconds(p.inertia_transverse) +
+               " kg m^2" + (config.scene == SceneType::kFixedTip ? " + m h^2 about the tip)" : ")"),
+           rates.pendulum);
+  }
   if (!(rates.attitude <= kMaxMotionRate)) {
     // The body rate |omega| / 2 comes from the initial rates: name the largest.
     const std::pair<const char*, double> candidates[] = {{"initial/spin", std::abs(ic.spin)},

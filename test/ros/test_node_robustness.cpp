@@ -215,8 +215,8 @@ typename Service::Response call(const std::string& name, const typename Service:
 
 }  // namespace
 
-// Issue 19, blame and silence: a refusal names the key that was changed (a mass of 1e300 makes the
-// sliding top's pendulum rate sqrt(m g h / A) too fast, which the core checks as gravity's); a
+// Issue 19, blame and silence: a refusal names the key that was changed (a mass of 1e300 was
+// refused as gravity's, the key of the pendulum rate sqrt(m g h / A) the core checked); a
 // parameter the node does not have is refused naming it (dynamic_reconfigure's server ignored it,
 // and the node said "applied"); a 100,000-character top name is refused, naming the key, in a
 // message of bounded length.
