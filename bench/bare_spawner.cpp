@@ -1,7 +1,8 @@
 // The yardstick of bench/node_scale.py --bare (issue 19, item 5): the least a roscpp node does for
 // a ~spawn of spinning_top_node, and nothing of the simulation. Each call advertises the top's
-// topics (~top_topics, the node's message types, queues and latches) and its ~<name>/reset
-// service (~top_reset_services), and sets its ~<name>/robot_description: the calls to the master
+// topics (~spawn_topics, the node's message types, queues and latches; none by default) and its
+// ~<name>/reset service (~spawn_reset_services, false by default), and sets its
+// ~<name>/robot_description: the calls to the master
 // that a spawn makes. No simulation, no /tf_static, no diagnostics, no log line. What the node's
 // spawn costs beyond this, as the count grows, is the node's own.
 #include <geometry_msgs/PointStamped.h>
@@ -22,12 +23,11 @@
 int main(int argc, char** argv) {
   ros::init(argc, argv, "bare_spawner");
   ros::NodeHandle private_nh("~");
-  std::vector<std::string> top_topics{"contact_point", "normal_force", "twist", "state", "markers", "event",
-                                      "event_stamped"};
-  // roscpp's command line sets `_top_topics:=[state,event]` as a string; a list from a file or
+  std::vector<std::string> top_topics;
+  // roscpp's command line sets `_spawn_topics:=[state,event]` as a string; a list from a file or
   // rosparam is a list.
   std::string top_topics_text;
-  if (private_nh.getParam("top_topics", top_topics_text)) {
+  if (private_nh.getParam("spawn_topics", top_topics_text)) {
     top_topics.clear();
     std::string name;
     for (const char c : top_topics_text + ",") {
@@ -39,10 +39,10 @@ int main(int argc, char** argv) {
       }
     }
   } else {
-    private_nh.param("top_topics", top_topics, top_topics);
+    private_nh.param("spawn_topics", top_topics, top_topics);
   }
-  bool top_reset_services = true;
-  private_nh.param("top_reset_services", top_reset_services, top_reset_services);
+  bool top_reset_services = false;
+  private_nh.param("spawn_reset_services", top_reset_services, top_reset_services);
   std::vector<ros::Publisher> publishers;
   std::vector<ros::ServiceServer> services;
   const boost::function<bool(std_srvs::Trigger::Request&, std_srvs::Trigger::Response&)> reset =

@@ -9,9 +9,10 @@ with the node's own account of its unregistration (its log line).
 test/node_many_tops.test asserts what holds at any load (a spawn does the same work whatever the
 count; exit code 0 at SIGINT); the wall times, which depend on the machine, are measured here.
 
---per-top chooses what each top registers with the master (repeat it to compare, runs
-interleaved): a comma list of its topics (~top_topics) and `reset` (its ~<name>/reset service,
-~top_reset_services); `all` (the default) is the seven topics and the service, `none` nothing.
+--per-top chooses what each spawned top registers with the master (repeat it to compare, runs
+interleaved): a comma list of its topics (~spawn_topics) and `reset` (its ~<name>/reset service,
+~spawn_reset_services); `none` (the node's default, and this script's) nothing, `all` the seven
+topics and the service.
 
 --bare runs bench/bare_spawner beside each configuration, the same way: a roscpp node whose
 ~spawn makes only the spawn's calls to the master (the top's topics, its reset service, its URDF
@@ -49,16 +50,15 @@ ALL_TOPICS = ["contact_point", "normal_force", "twist", "state", "markers", "eve
 
 def per_top_arguments(spec):
     """The node's arguments for a --per-top SPEC, and the registrations per top it makes."""
-    if spec == "all":
-        return [], len(ALL_TOPICS) + 1
-    names = [] if spec == "none" else [n.strip() for n in spec.split(",") if n.strip()]
+    names = (ALL_TOPICS + ["reset"] if spec == "all" else [] if spec == "none"
+             else [n.strip() for n in spec.split(",") if n.strip()])
     unknown = [n for n in names if n not in ALL_TOPICS + ["reset"]]
     if unknown:
         raise SystemExit(f"node_scale.py: error: --per-top: unknown {unknown} (topics {ALL_TOPICS}, reset)")
     topics = [n for n in names if n != "reset"]
-    arguments = [f"_top_topics:=[{','.join(topics)}]"]
-    if "reset" not in names:
-        arguments.append("_top_reset_services:=false")
+    # Both always given: the bare spawner's defaults follow the node's, but a row says what it ran.
+    arguments = [f"_spawn_topics:=[{','.join(topics)}]",
+                 f"_spawn_reset_services:={'true' if 'reset' in names else 'false'}"]
     return arguments, len(names)
 
 
@@ -117,10 +117,10 @@ def main():
     parser.add_argument("--bare", action="store_true",
                         help="also run bench/bare_spawner (the spawn's master calls only) in each configuration")
     parser.add_argument("--per-top", action="append", metavar="SPEC",
-                        help="what each top registers: all (default), none, or a comma list of its topics "
-                             "and reset (its service); repeat it to compare")
+                        help="what each spawned top registers: none (default), all, or a comma list of its "
+                             "topics and reset (its service); repeat it to compare")
     options = parser.parse_args()
-    specs = options.per_top or ["all"]
+    specs = options.per_top or ["none"]
     modes = [True] if options.paused else [False, True] if options.also_paused else [False]
     programs = ["spinning_top_node", "bare_spawner"] if options.bare else ["spinning_top_node"]
     for program in programs:

@@ -80,7 +80,7 @@ cmake --build "$SPINNING_TOP_BUILD" --target bare_tf_node --target bare_spawner 
 (
   spinning_top_source_devel
   /usr/bin/python3 "$SPINNING_TOP_ROOT/bench/node_cpu.py" "$results" $([ ${#quick[@]} -gt 0 ] && echo "--window 3 --repeat 1")
-  /usr/bin/python3 "$SPINNING_TOP_ROOT/bench/node_scale.py" "$results" --per-top all --per-top state,event_stamped --also-paused --bare --repeat 2 $([ ${#quick[@]} -gt 0 ] && echo "--count 200")
+  /usr/bin/python3 "$SPINNING_TOP_ROOT/bench/node_scale.py" "$results" --per-top none --per-top state,event_stamped --per-top all --also-paused --bare --repeat 2 $([ ${#quick[@]} -gt 0 ] && echo "--count 200")
 )
 
 echo "bench.sh: wall-clock lag and pacing diagnostics, quiet and beside two busy loops (issue 19)"

@@ -107,20 +107,21 @@ std::vector<std::string> read_top_names(const ros::NodeHandle& nh) {
   return names;
 }
 
-/// ~top_topics: names of per_top_topic_names(), each once, kept in the order a top advertises
-/// them (so that the master lists them alike whatever order the list gave).
-std::vector<std::string> read_top_topics(const ros::NodeHandle& nh) {
+/// ~top_topics (~spawn_topics): names of per_top_topic_names(), each once, kept in the order a
+/// top advertises them (so that the master lists them alike whatever order the list gave).
+std::vector<std::string> read_top_topics(const ros::NodeHandle& nh, const std::string& key,
+                                         const std::vector<std::string>& fallback) {
   bool given = false;
-  const std::vector<std::string> names = read_name_list(nh, "top_topics", "[state, event_stamped]", &given);
+  const std::vector<std::string> names = read_name_list(nh, key, "[state, event_stamped]", &given);
   const std::vector<std::string>& all = per_top_topic_names();
-  if (!given) return all;
+  if (!given) return fallback;
   std::string known;
   for (const std::string& topic : all) known += (known.empty() ? "" : ", ") + topic;
   std::set<std::string> seen;
   for (const std::string& name : names) {
-    require(std::find(all.begin(), all.end(), name) != all.end(), "top_topics",
+    require(std::find(all.begin(), all.end(), name) != all.end(), key,
             "'" + excerpt(name) + "' is not a top's topic (" + known + ")");
-    require(seen.insert(name).second, "top_topics", "'" + name + "' is listed twice");  // valid: short
+    require(seen.insert(name).second, key, "'" + name + "' is listed twice");  // valid: short
   }
   std::vector<std::string> ordered;
   for (const std::string& topic : all)
@@ -143,7 +144,7 @@ const std::vector<std::string>& node_setting_keys() {
       "marker_rate", "trace_length",
       "trace_resolution", "force_scale", "energy_drift_warning", "energy_drift_error", "quaternion_norm_error",
       "constraint_error", "late_tick_warning", "real_time_factor_warning", "tops", "top_topics",
-      "top_reset_services", "reset_reads_parameters",
+      "top_reset_services", "spawn_topics", "spawn_reset_services", "reset_reads_parameters",
       "scene_file", "overrides_file"};
   return keys;
 }
@@ -257,8 +258,10 @@ NodeSettings read_node_settings(const ros::NodeHandle& nh) {
   require(s.real_time_factor_warning >= 0.0 && s.real_time_factor_warning <= 1.0, "real_time_factor_warning",
           "must lie in [0, 1] (a fraction of the requested real-time factor)");
   s.tops = read_top_names(nh);
-  s.top_topics = read_top_topics(nh);
+  s.top_topics = read_top_topics(nh, "top_topics", per_top_topic_names());
   s.top_reset_services = read_bool(nh, "top_reset_services", s.top_reset_services);
+  s.spawn_topics = read_top_topics(nh, "spawn_topics", {});
+  s.spawn_reset_services = read_bool(nh, "spawn_reset_services", s.spawn_reset_services);
   const auto has_topic = [&s](const char* topic) {
     return std::find(s.top_topics.begin(), s.top_topics.end(), topic) != s.top_topics.end();
   };

@@ -21,6 +21,7 @@
 #include <thread>
 #include <unordered_set>
 
+#include "spinning_top/TopStateArray.h"
 #include "spinning_top/ros/live_keys.hpp"
 #include "spinning_top/ros/ros_parameters.hpp"
 #include "spinning_top/scene_file.hpp"
@@ -133,8 +134,8 @@ std::vector<std::string> changes_for(const SceneConfig& top, const SpinningTopCo
 }
 
 /// A refusal of a live change names a key the change changed: the core names the key of the
-/// quantity it checks (the pendulum rate sqrt(m g h / A) is "gravity"'s), which need not be the
-/// one changed (a mass of 1e300).
+/// quantity it checks (of the pendulum rate sqrt(m g h / A), the key furthest from the shipped
+/// top's), which need not be the one changed.
 InvalidParameter blame(const InvalidParameter& error, const std::vector<std::string>& changed) {
   std::string key = error.parameter();
   if (key == "initial/spin") key = "spin";  // the live key's name
@@ -177,8 +178,9 @@ bool yields_clock(const std::string& node) {
 }
 
 /// What a (re)started top's release already is, for the response of ~spawn and ~set_state: its
-/// events at t = 0 come before any subscriber can have connected to the topics a spawn creates
-/// (latched, ~event then keeps only the last of them), so the caller learns them here.
+/// events at t = 0 reach ~events' subscribers, but come before any subscriber can have connected
+/// to topics a spawn creates (latched, ~event then keeps only the last of them), so the caller
+/// learns them here.
 std::string at_release(const Simulator& simulator) {
   if (simulator.event() != Event::kNone)
     return std::string("; its release is already an event: ") + to_string(simulator.event()) +
@@ -216,14 +218,25 @@ SpinningTopNode::SpinningTopNode(ros::NodeHandle nh, ros::NodeHandle private_nh)
   status_publisher_ = private_nh_.advertise<std_msgs::String>("status", 1, /*latch=*/true);
   tf_publisher_ = nh_.advertise<tf2_msgs::TFMessage>("/tf", 1000);
   static_publisher_ = nh_.advertise<tf2_msgs::TFMessage>("/tf_static", 100, /*latch=*/true);
+  {
+    // Counted by the connect callbacks, as a top's topics are: without a subscriber the tick
+    // builds no TopStateArray.
+    const std::shared_ptr<std::atomic<int>> listeners = states_listeners_;
+    states_publisher_ = private_nh_.advertise<spinning_top::TopStateArray>(
+        "states", 100, [listeners](const ros::SingleSubscriberPublisher&) { ++*listeners; },
+        [listeners](const ros::SingleSubscriberPublisher&) { --*listeners; });
+  }
+  // Not latched: a latched topic keeps one message, the last event of whichever top had one.
+  // Several tops can have events within one tick: a deep queue.
+  events_publisher_ = private_nh_.advertise<spinning_top::TopEvent>("events", 1000);
   diagnostics_ = std::make_unique<diagnostic_updater::Updater>(nh_, private_nh_);
   diagnostics_->setHardwareID("spinning_top/" + std::string(to_string(configs.front().second.scene)));
   diagnostics_->add("simulation", this, &SpinningTopNode::diagnose);
 
   for (std::size_t i = 0; i < configs.size(); ++i) {
     stop_if_shutting_down("starting the tops");  // each top advertises its topics and services
-    add_top(std::make_unique<TopInstance>(configs[i].first, configs[i].second, positions[i], settings_, private_nh_,
-                                          clock_.time(), stamp_of(), world_clock()));
+    add_top(make_top(configs[i].first, configs[i].second, positions[i], settings_.top_topics),
+            settings_.top_reset_services);
   }
   send_static_transforms();
 
@@ -298,7 +311,6 @@ SpinningTopNode::SpinningTopNode(ros::NodeHandle nh, ros::NodeHandle private_nh)
   }
   ROS_INFO("spinning_top: %zu top%s, %g Hz, real-time factor %g%s", tops_.size(), tops_.size() == 1 ? "" : "s",
            settings_.rate, settings_.real_time_factor, paused_ ? " (paused)" : "");
-  started_ = 1;
 }
 
 SpinningTopNode::~SpinningTopNode() {
@@ -310,13 +322,21 @@ SpinningTopNode::~SpinningTopNode() {
   if (clock_arbiter_.joinable()) clock_arbiter_.join();
 }
 
-volatile std::sig_atomic_t SpinningTopNode::stop_requested_ = 0;
-volatile std::sig_atomic_t SpinningTopNode::started_ = 0;
+std::atomic<int> SpinningTopNode::stop_requested_{0};
+std::atomic<int> SpinningTopNode::stopping_the_start_{0};
 
 void SpinningTopNode::stop_if_shutting_down(const char* step) {
   if (ros::ok() && !ros::isShuttingDown() && !stop_requested()) return;
+  if (stop_requested() && ros::ok() && !ros::isShuttingDown()) {
+    // SIGINT, and ROS still up: what was advertised so far goes in one call to the master, as at
+    // a SIGINT once running. roscpp's own shutdown made a call per topic and service: with 300
+    // tops half started, ~1 s.
+    stopping_the_start_ = 1;
+    shut_down_at_sigint();
+  } else {
+    ros::shutdown();
+  }
   // Unwinding destroys every publisher made so far: after the shutdown that costs nothing.
-  ros::shutdown();
   throw StartupInterrupted(std::string("shut down while ") + step);
 }
 
@@ -704,7 +724,17 @@ Eigen::Vector2d SpinningTopNode::read_tip_position(const ParameterTree& tree, co
   return xy;
 }
 
-void SpinningTopNode::add_top(std::unique_ptr<TopInstance> top) {
+std::unique_ptr<TopInstance> SpinningTopNode::make_top(const std::string& name, const SceneConfig& config,
+                                                      const Eigen::Vector2d& tip_xy,
+                                                      const std::vector<std::string>& topics) {
+  TopInstance::EventSink to_events = [this](const spinning_top::TopEvent& event) {
+    if (events_publisher_) events_publisher_.publish(event);
+  };
+  return std::make_unique<TopInstance>(name, config, tip_xy, settings_, topics, private_nh_, clock_.time(), stamp_of(),
+                                       world_clock(), std::move(to_events));
+}
+
+void SpinningTopNode::add_top(std::unique_ptr<TopInstance> top, bool reset_service) {
   TopInstance* added = top.get();
   tops_.push_back(std::move(top));
   if (!added->name().empty()) {
@@ -724,7 +754,7 @@ void SpinningTopNode::add_top(std::unique_ptr<TopInstance> top) {
                              format("%.9f", (stamp_origin_ + ros::Duration(clock_.time())).toSec());
           return true;
         };
-    if (settings_.top_reset_services)
+    if (reset_service)
       top_reset_services_.push_back(private_nh_.advertiseService(name + "/reset", reset));
   }
 }
@@ -916,7 +946,16 @@ void SpinningTopNode::publish(const ros::Time& stamp) {
     }
   }
   const bool markers = tick % ticks_per_marker_ == 0;
-  for (const auto& top : tops_) top->publish(stamp, markers);
+  if (*states_listeners_ > 0 && states_publisher_) {
+    spinning_top::TopStateArray states;
+    states.header.stamp = stamp;
+    states.header.frame_id = settings_.world_frame;
+    states.states.reserve(tops_.size());
+    for (const auto& top : tops_) top->publish(stamp, markers, &states.states);
+    states_publisher_.publish(states);
+  } else {
+    for (const auto& top : tops_) top->publish(stamp, markers);
+  }
 }
 
 void SpinningTopNode::report(const std::string& status) {
@@ -1268,8 +1307,8 @@ bool SpinningTopNode::on_spawn(Spawn::Request& request, Spawn::Response& respons
       keys[key] = assignment.substr(equals + 1);
     }
     const SceneConfig config = parse_scene_config(keys, /*require_all=*/false);
-    add_top(std::make_unique<TopInstance>(request.name, config, Eigen::Vector2d(request.x, request.y), settings_,
-                                          private_nh_, clock_.time(), stamp_of(), world_clock()));
+    add_top(make_top(request.name, config, Eigen::Vector2d(request.x, request.y), settings_.spawn_topics),
+            settings_.spawn_reset_services);
   } catch (const InvalidParameter& error) {
     response.message = std::string("spawn refused: ") + error.what();
     ROS_WARN("spinning_top: %s", response.message.c_str());
@@ -1280,7 +1319,9 @@ bool SpinningTopNode::on_spawn(Spawn::Request& request, Spawn::Response& respons
   response.success = true;
   response.message = "top " + top.name() + ": scene " + to_string(top.simulator().config().scene) + ", " +
                      top.simulator().integrator_description() + "; frames " + top.body_frame() + ", " +
-                     top.contact_frame() + at_release(top.simulator());
+                     top.contact_frame() + at_release(top.simulator()) + "; its state on " +
+                     private_nh_.resolveName("states") + " and its events on " + private_nh_.resolveName("events") +
+                     (settings_.spawn_topics.empty() ? " (no topics of its own: ~spawn_topics)" : "");
   // DEBUG, not INFO: the caller has the message in the response, and roscpp puts the names of all
   // the node's topics in each /rosout record (7,000 names, ~165 kB, at the 1,000th top).
   ROS_DEBUG("spinning_top: spawned %s", response.message.c_str());

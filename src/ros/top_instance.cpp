@@ -9,8 +9,6 @@
 #include <algorithm>
 #include <cmath>
 
-#include "spinning_top/TopEvent.h"
-#include "spinning_top/TopState.h"
 #include "spinning_top/kinematics.hpp"
 #include "spinning_top/ros/conversions.hpp"
 #include "spinning_top/ros/live_keys.hpp"
@@ -70,14 +68,16 @@ Snapshot at_rest(Snapshot s) {
 }  // namespace
 
 TopInstance::TopInstance(std::string name, const SceneConfig& config, const Eigen::Vector2d& tip_xy,
-                         const NodeSettings& settings, ros::NodeHandle private_nh, double world_time,
-                         StampOf stamp_of, WorldClock world_clock)
+                         const NodeSettings& settings, const std::vector<std::string>& topics,
+                         ros::NodeHandle private_nh, double world_time, StampOf stamp_of, WorldClock world_clock,
+                         EventSink event_sink)
     : name_(std::move(name)),
       settings_(settings),
       body_frame_(top_frame(settings, name_, true)),
       contact_frame_(top_frame(settings, name_, false)),
       stamp_of_(std::move(stamp_of)),
       world_clock_(std::move(world_clock)),
+      event_sink_(std::move(event_sink)),
       nh_(name_.empty() ? private_nh : ros::NodeHandle(private_nh, name_)) {
   restart(config, tip_xy, world_time);  // validates before anything is advertised
   // Each per-tick topic with its count of subscribers (Listeners): the callbacks hold the counts,
@@ -89,9 +89,9 @@ TopInstance::TopInstance(std::string name, const SceneConfig& config, const Eige
         topic, queue, [listeners, count](const ros::SingleSubscriberPublisher&) { ++((*listeners).*count); },
         [listeners, count](const ros::SingleSubscriberPublisher&) { --((*listeners).*count); });
   };
-  // Only the topics of ~top_topics, in its (the advertisement) order: an empty ros::Publisher
-  // (false) is one the top does not have; nothing is published on it.
-  for (const std::string& topic : settings_.top_topics) {
+  // Only the topics asked for (~top_topics or ~spawn_topics), in their (the advertisement) order:
+  // an empty ros::Publisher (false) is one the top does not have; nothing is published on it.
+  for (const std::string& topic : topics) {
     if (topic == "contact_point")
       contact_point_publisher_ = counted(topic, 1000, &Listeners::contact_point, geometry_msgs::PointStamped());
     else if (topic == "normal_force")
@@ -311,7 +311,7 @@ void TopInstance::publish_event(const char* event, const Snapshot& at, bool term
     text.data = event;
     event_publisher_.publish(text);
   }
-  if (!event_stamped_publisher_) return;
+  if (!event_stamped_publisher_ && !event_sink_) return;
   spinning_top::TopEvent stamped;
   stamped.header.stamp = stamp_of_(origin_ + at.time);
   stamped.header.frame_id = settings_.world_frame;
@@ -321,7 +321,8 @@ void TopInstance::publish_event(const char* event, const Snapshot& at, bool term
   stamped.time = time_base_ + at.time;
   stamped.phase = to_string(at.phase);
   stamped.contact_point = to_point(world(at.outputs.contact_point));
-  event_stamped_publisher_.publish(stamped);
+  if (event_stamped_publisher_) event_stamped_publisher_.publish(stamped);
+  if (event_sink_) event_sink_(stamped);
 }
 
 Snapshot TopInstance::shown() const { return simulator_->event() == Event::kNone ? now_ : at_rest(now_); }
@@ -358,7 +359,7 @@ geometry_msgs::TransformStamped TopInstance::contact_transform(const ros::Time& 
   return contact;
 }
 
-bool TopInstance::publish(const ros::Time& stamp, bool with_markers) {
+bool TopInstance::publish(const ros::Time& stamp, bool with_markers, std::vector<spinning_top::TopState>* all_states) {
   Snapshot s = shown();
   if (!finite(s)) {  // the core promises this never happens; never pass it on
     ROS_ERROR_ONCE("spinning_top: non-finite state at t = %.9g s not published", s.time);
@@ -394,7 +395,7 @@ bool TopInstance::publish(const ros::Time& stamp, bool with_markers) {
   twist.twist.angular = to_vector(omega);
   if (listeners_->twist > 0) twist_publisher_.publish(twist);
 
-  if (listeners_->state > 0) {
+  if (listeners_->state > 0 || all_states != nullptr) {
     const EulerState e = euler_state(s.attitude, s.body_rates);
     // The monitors judge the integration: those of the core's state (also after the end).
     const Monitors m = monitors(now_, simulator_->config(), energy_baseline_, pivot_);
@@ -421,7 +422,8 @@ bool TopInstance::publish(const ros::Time& stamp, bool with_markers) {
     state.constraint_residual = m.constraint_residual;
     state.event = event_name(simulator_->event());
     state.phase = to_string(s.phase);
-    state_publisher_.publish(state);
+    if (listeners_->state > 0) state_publisher_.publish(state);
+    if (all_states != nullptr) all_states->push_back(std::move(state));
   }
 
   if (settings_.trace_length > 0 &&

@@ -65,6 +65,14 @@ TEST(NodeBadParameter, TopTopicThatIsNotATopsTopic) {
 TEST(NodeBadParameter, TopTopicListedTwice) {
   expect_refused("bad_top_topics_twice", "_top_topics:=[state,state]", "top_topics", "listed twice");
 }
+// ~spawn_topics and ~spawn_reset_services are read and refused as ~top_topics is, at the start
+// (not at the first spawn).
+TEST(NodeBadParameter, SpawnTopicThatIsNotATopsTopic) {
+  expect_refused("bad_spawn_topics", "_spawn_topics:=[states]", "spawn_topics", "'states' is not a top's topic");
+}
+TEST(NodeBadParameter, SpawnResetServicesThatIsNotABool) {
+  expect_refused("bad_spawn_reset", "_spawn_reset_services:=2", "spawn_reset_services");
+}
 TEST(NodeBadParameter, WaitingForATopicNoTopHas) {
   expect_refused("bad_wait", "_top_topics:=[event] _wait_for_subscriber:=true", "wait_for_subscriber");
 }

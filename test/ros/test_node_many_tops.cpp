@@ -3,9 +3,12 @@
 //   - SIGINT at any point of the start-up ends the node with exit code 0 (it trapped, SIGTRAP,
 //     exit 133, publishing /tf_static on a publisher that the shutdown had invalidated);
 //   - a spawn does the same work whatever the count of tops: the messages and parameters one
-//     spawn publishes and writes, counted, are the same for the 1st and the 200th spawn;
+//     spawn publishes and writes, counted, are the same for the 1st and the 30th spawn, and by
+//     default it registers nothing with the master (whose lists of a node's registrations are
+//     searched linearly);
 //   - SIGINT with many tops: exit code 0 (the time it takes is printed, not asserted);
-//   - ~top_topics and ~top_reset_services: each top registers what they list, and no more.
+//   - ~top_topics, ~top_reset_services, ~spawn_topics and ~spawn_reset_services: each top
+//     registers what they list, and no more; ~states and ~events carry every top.
 // Nothing here depends on the machine's load: the SIGINTs are sent at stages of the start the
 // test sees (parameters the node writes), and the wall bounds are hang guards only.
 #include <gtest/gtest.h>
@@ -22,13 +25,16 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <memory>
 #include <string>
 #include <utility>
 #include <vector>
 
 #include "node_test_helpers.hpp"
 #include "spinning_top/Spawn.h"
+#include "spinning_top/TopEvent.h"
 #include "spinning_top/TopState.h"
+#include "spinning_top/TopStateArray.h"
 
 using node_test::Recorder;
 using node_test::wait_for;
@@ -106,8 +112,13 @@ void many_tops(const std::string& name, int count) {
 
 }  // namespace
 
+namespace {
+std::pair<int, int> registrations_of(const std::string& node);
+}  // namespace
+
 // SIGINT while the tops are being started (after the 10th, after the 150th) and once the last
-// one is there: each time a clean exit, 0, within the guard.
+// one is there: each time a clean exit, 0, within the guard, and nothing of the node left on the
+// master (the start unregisters what it advertised in one call, as a running node does).
 TEST(ManyTops, SigintDuringTheStartEndsTheNodeCleanly) {
   const int count = 300;
   for (const std::string stage : {"t010", "t150", "t299"}) {
@@ -126,6 +137,9 @@ TEST(ManyTops, SigintDuringTheStartEndsTheNodeCleanly) {
         << "SIGINT after " << stage << " started: " << describe(status);
     std::printf("[ measured ] SIGINT after %s of %d tops started: %s, %.3f s after SIGINT\n", stage.c_str(), count,
                 describe(status).c_str(), seconds);
+    const auto left = registrations_of("/" + name);
+    EXPECT_EQ(left.first, 0) << "topics of the node left on the master after SIGINT after " << stage;
+    EXPECT_EQ(left.second, 0) << "services of the node left on the master after SIGINT after " << stage;
     ros::param::del("/" + name);
   }
 }
@@ -159,7 +173,8 @@ bool publishes(const std::string& node, const std::string& topic) {
 
 // What one spawn does, counted: /tf_static is republished only when the set of pivots changes
 // (each spawn sent every pivot again: with 50 pivots, 50 transforms per spawn of any top), a
-// spawn registers the same 7 topics and 1 service for the 1st top as for the 30th, and it sends
+// spawn registers nothing with the master, for the 1st top as for the 30th (~spawn_topics and
+// ~spawn_reset_services are empty by default; it registered 7 topics and 1 service), and it sends
 // nothing to /rosout (roscpp puts the names of all the node's topics in each record: with 1,000
 // tops, 7,000 names, ~165 kB a spawn, and rosout.log grew by the square of the count). Then SIGINT:
 // exit code 0, and the master keeps nothing of the node (its topics unregistered in one call).
@@ -208,9 +223,11 @@ TEST(ManyTops, ASpawnDoesTheSameWorkWhateverTheCountAndTheNodeLeavesCleanly) {
   const auto spawn_records = records_of_node() - records_before_spawns;
   EXPECT_EQ(spawn_records, 0) << "/rosout records during 30 spawns; the last: " << log.messages().back().msg;
   for (std::size_t i = 0; i < added.size(); ++i) {
-    EXPECT_EQ(added[i].first, 7) << "topics registered by spawn " << i;
-    EXPECT_EQ(added[i].second, 1) << "services registered by spawn " << i;
+    EXPECT_EQ(added[i].first, 0) << "topics registered by spawn " << i;
+    EXPECT_EQ(added[i].second, 0) << "services registered by spawn " << i;
   }
+  // The tops of ~tops have theirs (~top_topics, ~top_reset_services: all by default).
+  EXPECT_EQ(registrations_under("/" + name, "/" + name + "/t049/"), std::make_pair(7, 1));
   spinning_top::Spawn pivot;
   pivot.request.name = "pivoting";
   pivot.request.keys = {"after_lift_off=stop"};
@@ -235,11 +252,14 @@ TEST(ManyTops, ASpawnDoesTheSameWorkWhateverTheCountAndTheNodeLeavesCleanly) {
   ros::param::del("/" + name);
 }
 
-// ~top_topics and ~top_reset_services choose what each top registers with the master: with
-// hundreds of tops, fewer registrations per top keep a spawn's cost flat and the shutdown short
-// (bench/node_scale.py --per-top). With [state] and no reset services, the tops of ~tops and each
-// spawned top register their ~<name>/state alone (1 topic, no service), the state comes with the
-// top's name, and SIGINT leaves nothing of the node on the master.
+// ~top_topics and ~top_reset_services choose what each top of ~tops registers with the master,
+// ~spawn_topics and ~spawn_reset_services what a spawned top does: with hundreds of tops, fewer
+// registrations per top keep a spawn's cost flat and the shutdown short (bench/node_scale.py
+// --per-top). With [state] and no reset services, the tops of ~tops register their
+// ~<name>/state alone (1 topic, no service); with [state] and reset services, each spawned top
+// its ~<name>/state and ~<name>/reset. Each state comes with the top's name, ~states carries
+// every top in the node's order, ~events a spawned top's event, and SIGINT leaves nothing of the
+// node on the master.
 TEST(ManyTops, TopTopicsChooseWhatEachTopRegisters) {
   const std::string name = "lean";
   many_tops(name, 3);
@@ -248,6 +268,8 @@ TEST(ManyTops, TopTopicsChooseWhatEachTopRegisters) {
   topics[0] = std::string("state");
   ros::param::set("/" + name + "/top_topics", topics);
   ros::param::set("/" + name + "/top_reset_services", false);
+  ros::param::set("/" + name + "/spawn_topics", topics);
+  ros::param::set("/" + name + "/spawn_reset_services", true);
   const std::string node = "/" + name;
   const pid_t pid = start_node(name);
   ASSERT_GT(pid, 0);
@@ -259,6 +281,8 @@ TEST(ManyTops, TopTopicsChooseWhatEachTopRegisters) {
   EXPECT_EQ(registrations_under(node, node + "/t002/reset").second, 0) << "~top_reset_services is false";
 
   ros::NodeHandle nh;
+  Recorder<spinning_top::TopEvent> events(nh, node + "/events", 100);
+  ASSERT_TRUE(wait_for([&] { return events.publishers() > 0; }, 30.0)) << "~events never connected";
   ros::ServiceClient spawn = nh.serviceClient<spinning_top::Spawn>(node + "/spawn", true);
   // Counted under each spawned top's own namespace: the node may still be registering its own
   // services (dynamic_reconfigure's, roscpp's logger services) when ~spawn is first answered.
@@ -270,11 +294,58 @@ TEST(ManyTops, TopTopicsChooseWhatEachTopRegisters) {
     ASSERT_TRUE(spawn.call(srv) && srv.response.success) << srv.response.message;
     const auto added = registrations_under(node, node + "/" + srv.request.name + "/");
     EXPECT_EQ(added.first, 1) << "topics registered by spawn " << i;
-    EXPECT_EQ(added.second, 0) << "services registered by spawn " << i;
+    EXPECT_EQ(added.second, 1) << "services registered by spawn " << i;
   }
   Recorder<spinning_top::TopState> states(nh, node + "/s4/state", 100);
   ASSERT_TRUE(wait_for([&] { return states.size() >= 3; }, 30.0)) << "no ~s4/state";
   EXPECT_EQ(states.messages().back().name, "s4");
+
+  // ~states: every top at each tick, in the node's order, with the tick's stamp; each entry as
+  // the top's own ~state of that tick.
+  Recorder<spinning_top::TopStateArray> all(nh, node + "/states", 100);
+  ASSERT_TRUE(wait_for([&] { return all.size() >= 3 && states.size() >= 10; }, 30.0)) << "no ~states";
+  const std::vector<std::string> order = {"t000", "t001", "t002", "s0", "s1", "s2", "s3", "s4"};
+  const auto arrays = all.messages();
+  const auto own = states.messages();
+  int matched = 0;
+  for (const auto& array : arrays) {
+    ASSERT_EQ(array.states.size(), order.size());
+    for (std::size_t i = 0; i < order.size(); ++i) {
+      EXPECT_EQ(array.states[i].name, order[i]);
+      EXPECT_EQ(array.states[i].header.stamp, array.header.stamp);
+    }
+    for (const auto& s4 : own)
+      if (s4.header.stamp == array.header.stamp) {
+        const spinning_top::TopState& in_array = array.states[7];
+        EXPECT_EQ(in_array.time, s4.time);
+        EXPECT_EQ(in_array.tilt, s4.tilt);
+        EXPECT_EQ(in_array.heading, s4.heading);
+        EXPECT_EQ(in_array.spin_angle, s4.spin_angle);
+        EXPECT_EQ(in_array.normal_force, s4.normal_force);
+        EXPECT_EQ(in_array.contact_point.x, s4.contact_point.x);
+        ++matched;
+      }
+  }
+  EXPECT_GT(matched, 0) << "no tick in both ~states and ~s4/state";
+
+  // ~events: a spawned top whose release is an event (R < 0 at t = 0 on a tip that may not fly).
+  spinning_top::Spawn stopped;
+  stopped.request.name = "stopped";
+  stopped.request.scene_file = SPINNING_TOP_SOURCE_DIR "/config/extreme/lift_off.yaml";
+  stopped.request.keys = {"after_lift_off=stop", "initial/precession_rate=150"};
+  stopped.request.x = 1.0;
+  ASSERT_TRUE(spawn.call(stopped) && stopped.response.success) << stopped.response.message;
+  EXPECT_NE(stopped.response.message.find(node + "/states"), std::string::npos) << stopped.response.message;
+  const auto first_of_stopped = [&] {
+    for (const auto& e : events.messages())
+      if (e.name == "stopped") return std::make_unique<spinning_top::TopEvent>(e);
+    return std::unique_ptr<spinning_top::TopEvent>();
+  };
+  ASSERT_TRUE(wait_for([&] { return first_of_stopped() != nullptr; }, 30.0)) << "no event of 'stopped' on ~events";
+  const spinning_top::TopEvent event = *first_of_stopped();
+  EXPECT_EQ(event.event, "lift_off");
+  EXPECT_TRUE(event.terminal);
+  EXPECT_EQ(event.time, 0.0);
 
   ASSERT_EQ(kill(pid, SIGINT), 0);
   const int status = wait_exit(pid, 60.0);

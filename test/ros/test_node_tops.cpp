@@ -17,6 +17,7 @@
 #include "spinning_top/SetState.h"
 #include "spinning_top/Spawn.h"
 #include "spinning_top/TopState.h"
+#include "spinning_top/TopStateArray.h"
 
 using node_test::Recorder;
 using node_test::trigger;
@@ -92,10 +93,19 @@ TEST(Tops, TwoTopsShareOneClock) {
   EXPECT_NE(urdf.find("<mass value=\"0.10000000000000001\"/>"), std::string::npos) << urdf;
 }
 
-// ~spawn adds a top with its own keys, refuses bad ones naming the key, and ~kill removes it.
+// ~spawn adds a top with its own keys, refuses bad ones naming the key, and ~kill removes it. A
+// spawned top has no topics of its own by default (~spawn_topics): its state is on ~states.
 TEST(Tops, SpawnAndKill) {
   ros::NodeHandle nh;
-  Recorder<spinning_top::TopState> third(nh, "/spinning_top/third/state");
+  Recorder<spinning_top::TopStateArray> states(nh, "/spinning_top/states");
+  // The states of `name` in ~states, in time order.
+  const auto states_of = [&](const std::string& name) {
+    std::vector<spinning_top::TopState> of;
+    for (const auto& array : states.messages())
+      for (const auto& s : array.states)
+        if (s.name == name) of.push_back(s);
+    return of;
+  };
   spinning_top::Spawn::Request bad;
   bad.name = "third";
   bad.keys = {"initial/tilt=2.0"};
@@ -116,8 +126,10 @@ TEST(Tops, SpawnAndKill) {
   request.x = 0.3;
   const auto spawned = call<spinning_top::Spawn>("/spinning_top/spawn", request);
   ASSERT_TRUE(spawned.success) << spawned.message;
-  ASSERT_TRUE(wait_for([&] { return third.size() >= 50; }, 10.0));
-  const spinning_top::TopState s = third.messages().front();
+  EXPECT_TRUE(node_test::publishers_of("/spinning_top/third/state").empty())
+      << "a spawned top has no ~<name>/state by default";
+  ASSERT_TRUE(wait_for([&] { return states_of("third").size() >= 50; }, 10.0));
+  const spinning_top::TopState s = states_of("third").front();
   EXPECT_EQ(s.name, "third");
   EXPECT_EQ(s.spin, 90.0);
   EXPECT_EQ(s.contact_point.x, 0.3);
@@ -129,9 +141,11 @@ TEST(Tops, SpawnAndKill) {
   kill.name = "third";
   EXPECT_TRUE(call<spinning_top::Kill>("/spinning_top/kill", kill).success);
   ros::WallDuration(0.3).sleep();
-  const size_t after = third.size();
+  const size_t after = states_of("third").size();
+  const size_t arrays = states.size();
   ros::WallDuration(0.5).sleep();
-  EXPECT_EQ(third.size(), after) << "published after ~kill";
+  EXPECT_GT(states.size(), arrays) << "~states stopped";
+  EXPECT_EQ(states_of("third").size(), after) << "published after ~kill";
   EXPECT_FALSE(call<spinning_top::Kill>("/spinning_top/kill", kill).success) << "killed twice";
   EXPECT_FALSE(ros::param::has("/spinning_top/third/robot_description")) << "a killed top's URDF stays";
   // A later /tf_static subscriber gets the pivots of the tops that are left, not the killed one's.

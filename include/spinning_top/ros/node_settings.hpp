@@ -69,6 +69,12 @@ struct NodeSettings {
   /// ~top_reset_services: each named top advertises ~<name>/reset (one more registration per top,
   /// and one more call to the master at shutdown: roscpp unregisters services one by one)
   bool top_reset_services = true;
+  /// ~spawn_topics and ~spawn_reset_services: the same for a top added by ~spawn; default none.
+  /// rosmaster keeps a node's registrations in lists it searches linearly, so each registration
+  /// costs more as the node has more: with none, the 1,000th spawn costs what the first did and
+  /// the exit stays short. A spawned top is on ~states, ~events, tf, diagnostics and ~get_state.
+  std::vector<std::string> spawn_topics;
+  bool spawn_reset_services = false;
 };
 
 /// The per-top topics in the order a top advertises them: contact_point, normal_force, twist,

@@ -10,6 +10,7 @@
 #include <rosgraph_msgs/Clock.h>
 #include <std_srvs/Trigger.h>
 
+#include <atomic>
 #include <condition_variable>
 #include <csignal>
 #include <memory>
@@ -110,13 +111,13 @@ class SpinningTopNode {
   SpinningTopNode(const SpinningTopNode&) = delete;
   SpinningTopNode& operator=(const SpinningTopNode&) = delete;
 
-  /// SIGINT (main's handler; async-signal-safe): the start stops at its next step, the spin at
-  /// its next callback.
+  /// SIGINT (main's handler; async-signal-safe: a lock-free atomic, also read by main's
+  /// watchdog thread): the start stops at its next step, the spin at its next callback.
   static void request_stop() noexcept { stop_requested_ = 1; }
   static bool stop_requested() noexcept { return stop_requested_ != 0; }
-  /// Whether the start is complete (until then SIGINT shuts ROS down as roscpp's own handler
-  /// does, which also ends a wait for an unreachable master).
-  static bool started() noexcept { return started_ != 0; }
+  /// Whether a start interrupted by SIGINT is unregistering what it advertised (in one call to
+  /// the master, as shut_down_at_sigint() does): main's watchdog then leaves ROS alone.
+  static bool stopping_the_start() noexcept { return stopping_the_start_ != 0; }
 
   /// One turn of main's loop: serves the callback queue until the next tick is due (at most
   /// 0.1 s), then takes the ticks due (see TickTimer).
@@ -153,8 +154,15 @@ class SpinningTopNode {
   /// Throws StartupInterrupted if ROS is shutting down or SIGINT came (checked between the steps
   /// of the start); then what was advertised so far is unregistered and ROS shut down first.
   void stop_if_shutting_down(const char* step);
-  static volatile std::sig_atomic_t stop_requested_, started_;
-  void add_top(std::unique_ptr<TopInstance> top);
+  static std::atomic<int> stop_requested_, stopping_the_start_;
+  static_assert(std::atomic<int>::is_always_lock_free, "set from a signal handler");
+  /// `reset_service`: the top (a named one) advertises ~<name>/reset (~top_reset_services,
+  /// ~spawn_reset_services).
+  void add_top(std::unique_ptr<TopInstance> top, bool reset_service);
+  /// A new top's topics and its events' way to ~events: ~top_topics at the start, ~spawn_topics
+  /// for a spawned top.
+  std::unique_ptr<TopInstance> make_top(const std::string& name, const SceneConfig& config,
+                                        const Eigen::Vector2d& tip_xy, const std::vector<std::string>& topics);
   TopInstance* find_top(const std::string& name);
 
   void on_timer(const ros::WallTimerEvent& event);
@@ -287,6 +295,10 @@ class SpinningTopNode {
   double last_lag_ = 0.0;  // [wall s] behind the wall clock after the last callback
 
   ros::Publisher clock_publisher_, status_publisher_;
+  // ~states (every top's TopState in one TopStateArray a tick, when subscribed) and ~events (every
+  // top's TopEvent): one registration each however many tops, so a top needs none of its own.
+  ros::Publisher states_publisher_, events_publisher_;
+  std::shared_ptr<std::atomic<int>> states_listeners_ = std::make_shared<std::atomic<int>>(0);
   // /tf and /tf_static (tf2_msgs/TFMessage) as tf2_ros's broadcasters publish them, on our own
   // publishers: their validity can be checked (tf2_ros traps on an invalid one during a shutdown),
   // and the latched /tf_static message is exactly the pivots that exist now.

@@ -14,6 +14,8 @@
 #include <string>
 #include <vector>
 
+#include "spinning_top/TopEvent.h"
+#include "spinning_top/TopState.h"
 #include "spinning_top/ros/node_settings.hpp"
 #include "spinning_top/simulator.hpp"
 
@@ -43,16 +45,20 @@ class TopInstance {
   using StampOf = std::function<ros::Time(double world_time)>;
   /// The world's tick clock now (WorldTime): a start at its time() is at its tick.
   using WorldClock = std::function<WorldTime()>;
+  /// Where every event of the top goes besides its own ~event_stamped: the node's ~events.
+  using EventSink = std::function<void(const spinning_top::TopEvent&)>;
 
   /// `name` "" is the node's own top: frames <body_frame>, <contact_frame> and topics ~/...;
   /// a named top has frames <name>/<body_frame>, <name>/<contact_frame> and topics ~<name>/...
   /// (frames prefixed with the node's namespace unless given explicitly: top_frame()).
   /// Its URDF goes on ~robot_description (~<name>/robot_description).
   /// Its simulated time 0 is the world's `world_time`; its tip starts at `tip_xy` on the floor.
+  /// It advertises `topics` (of per_top_topic_names(): ~top_topics, or ~spawn_topics for a
+  /// spawned top) and passes each event to `event_sink` too.
   /// Throws InvalidParameter (nothing advertised) if the configuration is invalid.
   TopInstance(std::string name, const SceneConfig& config, const Eigen::Vector2d& tip_xy,
-              const NodeSettings& settings, ros::NodeHandle private_nh, double world_time, StampOf stamp_of,
-              WorldClock world_clock);
+              const NodeSettings& settings, const std::vector<std::string>& topics, ros::NodeHandle private_nh,
+              double world_time, StampOf stamp_of, WorldClock world_clock, EventSink event_sink);
   ~TopInstance();
   TopInstance(const TopInstance&) = delete;
   TopInstance& operator=(const TopInstance&) = delete;
@@ -77,9 +83,10 @@ class TopInstance {
   }
   geometry_msgs::TransformStamped contact_transform(const ros::Time& stamp) const;
   /// The tick's topics: contact point, floor force, twist, state (and markers when asked); after
-  /// the event that ended the run, the final pose at rest (shown()).
+  /// the event that ended the run, the final pose at rest (shown()). With `all_states`, the
+  /// state is appended there too (the node's ~states).
   /// Returns false (nothing published) for a non-finite state, which the core promises never happens.
-  bool publish(const ros::Time& stamp, bool with_markers);
+  bool publish(const ros::Time& stamp, bool with_markers, std::vector<spinning_top::TopState>* all_states = nullptr);
 
   /// Back to start_config() at the world's time (its simulated time restarts at 0).
   void reset(double world_time);
@@ -128,11 +135,12 @@ class TopInstance {
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) const;
   Event event() const { return simulator_->event(); }
   /// Whether ~contact_point and ~state both have a subscriber, those of them the top has
-  /// (~top_topics; read_node_settings requires one with ~wait_for_subscriber).
+  /// (~top_topics; read_node_settings requires one with ~wait_for_subscriber; true for a top
+  /// without either).
   bool subscribed() const {
     return (!contact_point_publisher_ || listeners_->contact_point > 0) && (!state_publisher_ || listeners_->state > 0);
   }
-  /// The top's topics (~top_topics), resolved, in the order they were advertised (the master
+  /// The top's topics (~top_topics or ~spawn_topics), resolved, in the order they were advertised (the master
   /// lists a node's registrations in that order; see SpinningTopNode::unregister_at_exit).
   std::vector<std::string> advertised_topics() const;
 
@@ -168,6 +176,7 @@ class TopInstance {
   double energy_baseline_ = 0.0;
   StampOf stamp_of_;
   WorldClock world_clock_;
+  EventSink event_sink_;
   std::deque<Vector3> trace_;
   ros::NodeHandle nh_;  // ~ or ~<name>
   /// Subscribers of each per-tick topic, counted by the publishers' connect and disconnect
