@@ -80,7 +80,7 @@ What each front end gets (seed 19):
 - node: start-up parameters (strings for numbers, 1e300, nan, bad ``~tops``), SIGINT during
   start-up with 300 tops (also with the master stopped at the same time), ``~spawn`` (huge and
   bad names, keys, scene files with tags/010/1e300, /dev/zero, a FIFO, a bomb), ``~set_state``,
-  R < 0 at release (``~event`` and ``~normal_force`` watched), dynamic_reconfigure through its
+  R < 0 at release (``~event``, ``~events``, ``~normal_force``, ``~states`` watched), dynamic_reconfigure through its
   raw service (``~status`` read), ``~kill``, and 300 spawns in a row at 1 kHz (the last 20 no
   slower than 3x the first 20) then SIGINT (under 1 s).
 """
@@ -1709,9 +1709,23 @@ try:
                 if not finite_msg(m):
                     data["nonfinite"] += 1
             base = op["prefix"]
+            # A top's own topics (a spawned top has none by default: ~spawn_topics), and the
+            # node's ~states and ~events, which carry every top by name.
+            from spinning_top.msg import TopEvent, TopStateArray
+            node_ns, top = base.rsplit("/", 1)
+            def on_states(m):
+                for s in m.states:
+                    if s.name == top:
+                        on_s(s)
+                        data["min_R"] = s.normal_force if data["min_R"] is None else min(data["min_R"], s.normal_force)
+            def on_events(m):
+                if m.name == top:
+                    data["events"].append(m.event)
             subs = [rospy.Subscriber(base + "/normal_force", WrenchStamped, on_w),
                     rospy.Subscriber(base + "/event", String, on_e),
-                    rospy.Subscriber(base + "/state", TopState, on_s)]
+                    rospy.Subscriber(base + "/state", TopState, on_s),
+                    rospy.Subscriber(node_ns + "/states", TopStateArray, on_states),
+                    rospy.Subscriber(node_ns + "/events", TopEvent, on_events)]
             time.sleep(0.8)
             if op.get("then"):
                 t = op["then"]
@@ -2152,7 +2166,7 @@ def gen_node(ctx, rng):
             if how == "spawn" and "lift_off at t = 0" in r.get("message", ""):
                 return "valid edge value", (f"lift_off in the response (~event had {r.get('events')}), "
                                             f"least R {r.get('min_R')}")
-            return "silently wrong", f"no lift_off on ~event (events: {r.get('events')}) nor in the response"
+            return "silently wrong", f"no lift_off on ~event or ~events (events: {r.get('events')}) nor in the response"
         cases.append(Case("node", f"~{how} with R < 0 at release (tilt {tilt}, precession {prec})", "accept", [], fn,
                           classify=classify))
     liftoff_case("set_state", 0.6, -50.0)
