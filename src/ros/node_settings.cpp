@@ -139,7 +139,7 @@ const std::vector<std::string>& per_top_topic_names() {
 
 const std::vector<std::string>& node_setting_keys() {
   static const std::vector<std::string> keys = {
-      "rate", "real_time_factor", "max_lag", "tick_budget", "publish_clock", "clock_rate", "tf_rate",
+      "rate", "real_time_factor", "max_lag", "tick_budget", "publish_clock", "clock_rate", "tf_rate", "states_rate",
       "start_paused", "wait_for_subscriber", "world_frame", "frame_prefix", "body_frame", "contact_frame",
       "marker_rate", "trace_length",
       "trace_resolution", "force_scale", "energy_drift_warning", "energy_drift_error", "quaternion_norm_error",
@@ -216,6 +216,7 @@ NodeSettings read_node_settings(const ros::NodeHandle& nh) {
   s.publish_clock = read_clock_mode(nh, s.publish_clock);
   s.clock_rate = read_publication_rate(nh, "clock_rate", s.clock_rate);
   s.tf_rate = read_publication_rate(nh, "tf_rate", s.tf_rate);
+  s.states_rate = read_publication_rate(nh, "states_rate", s.states_rate);
   s.start_paused = read_bool(nh, "start_paused", s.start_paused);
   s.wait_for_subscriber = read_bool(nh, "wait_for_subscriber", s.wait_for_subscriber);
   s.world_frame = read_string(nh, "world_frame", s.world_frame);

@@ -800,6 +800,7 @@ void SpinningTopNode::restart_timer() {
   ticks_per_marker_ = ticks_per(settings_.rate, settings_.marker_rate);
   ticks_per_clock_ = ticks_per(settings_.rate, settings_.clock_rate);
   ticks_per_tf_ = ticks_per(settings_.rate, settings_.tf_rate);
+  ticks_per_states_ = ticks_per(settings_.rate, settings_.states_rate);
   const bool first = !timer_.isValid();
   timer_.setPeriod(ros::WallDuration(period));
   if (first) timer_.start();  // as createWallTimer's timer
@@ -946,7 +947,8 @@ void SpinningTopNode::publish(const ros::Time& stamp) {
     }
   }
   const bool markers = tick % ticks_per_marker_ == 0;
-  if (*states_listeners_ > 0 && states_publisher_) {
+  // ~states_rate: with n tops a message holds n states, so a subscriber may want fewer of them.
+  if (*states_listeners_ > 0 && states_publisher_ && tick % ticks_per_states_ == 0) {
     spinning_top::TopStateArray states;
     states.header.stamp = stamp;
     states.header.frame_id = settings_.world_frame;

@@ -258,8 +258,8 @@ TEST(ManyTops, ASpawnDoesTheSameWorkWhateverTheCountAndTheNodeLeavesCleanly) {
 // --per-top). With [state] and no reset services, the tops of ~tops register their
 // ~<name>/state alone (1 topic, no service); with [state] and reset services, each spawned top
 // its ~<name>/state and ~<name>/reset. Each state comes with the top's name, ~states carries
-// every top in the node's order, ~events a spawned top's event, and SIGINT leaves nothing of the
-// node on the master.
+// every top in the node's order (every 2nd tick: ~states_rate), ~events a spawned top's event,
+// and SIGINT leaves nothing of the node on the master.
 TEST(ManyTops, TopTopicsChooseWhatEachTopRegisters) {
   const std::string name = "lean";
   many_tops(name, 3);
@@ -270,6 +270,7 @@ TEST(ManyTops, TopTopicsChooseWhatEachTopRegisters) {
   ros::param::set("/" + name + "/top_reset_services", false);
   ros::param::set("/" + name + "/spawn_topics", topics);
   ros::param::set("/" + name + "/spawn_reset_services", true);
+  ros::param::set("/" + name + "/states_rate", 50.0);  // every 2nd tick of 100 Hz
   const std::string node = "/" + name;
   const pid_t pid = start_node(name);
   ASSERT_GT(pid, 0);
@@ -306,6 +307,8 @@ TEST(ManyTops, TopTopicsChooseWhatEachTopRegisters) {
   ASSERT_TRUE(wait_for([&] { return all.size() >= 3 && states.size() >= 10; }, 30.0)) << "no ~states";
   const std::vector<std::string> order = {"t000", "t001", "t002", "s0", "s1", "s2", "s3", "s4"};
   const auto arrays = all.messages();
+  for (std::size_t i = 1; i < arrays.size(); ++i)  // ~states_rate 50 Hz at 100 Hz: every 2nd tick
+    EXPECT_NEAR((arrays[i].header.stamp - arrays[i - 1].header.stamp).toSec(), 0.02, 1e-6) << "~states_rate";
   const auto own = states.messages();
   int matched = 0;
   for (const auto& array : arrays) {

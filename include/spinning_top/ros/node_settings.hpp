@@ -28,6 +28,7 @@ struct NodeSettings {
   ClockMode publish_clock = ClockMode::kAuto;  ///< ~publish_clock: auto (default), true or false
   double clock_rate = 0.0;          ///< /clock messages per simulated second [Hz]; 0 = every tick
   double tf_rate = 0.0;             ///< /tf messages per simulated second [Hz]; 0 = every tick
+  double states_rate = 0.0;         ///< ~states messages per simulated second [Hz]; 0 = every tick
   bool start_paused = false;
   /// Hold the first tick until the first top's ~contact_point and ~state (and /clock, when
   /// published) have a subscriber, e.g. `rosbag record`, so that a recording starts at time 0

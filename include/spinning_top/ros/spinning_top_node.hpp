@@ -280,7 +280,7 @@ class SpinningTopNode {
   bool paused_ = false;
   bool waiting_for_subscriber_ = false;  // ~wait_for_subscriber: no tick yet, nobody listening yet
   bool tick_unfinished_ = false;  // the current tick ran out of its budget; the next call goes on
-  long ticks_per_clock_ = 1, ticks_per_tf_ = 1, ticks_per_marker_ = 1;
+  long ticks_per_clock_ = 1, ticks_per_tf_ = 1, ticks_per_marker_ = 1, ticks_per_states_ = 1;
 
   // Pacing and cost, reported in diagnostics (per 1 s window and in total).
   long catch_up_run_ = 0;                                   // late ticks in a row, back to back
